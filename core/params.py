@@ -1,0 +1,268 @@
+"""Every tunable number of the engine: nested frozen dataclasses, one per stage, saved as YAML.
+
+Defaults cite the paper and section they come from. Change a value with
+`dataclasses.replace` (or `Params.with_value("vehicle.search_width_m", 3.0)`); every class
+validates itself in `__post_init__` and names the field it rejects.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import types
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TypeVar
+
+import yaml
+
+PARAMS_FORMAT_VERSION = 1
+
+
+class ParamsError(ValueError):
+    """A parameter file or value that cannot be used; the message names the field."""
+
+
+def _check(ok: bool, name: str, expected: str, got: object) -> None:
+    if not ok:
+        raise ParamsError(f"{name}: expected {expected}, got {got!r}")
+
+
+def _positive(obj: object, *names: str) -> None:
+    for name in names:
+        value = getattr(obj, name)
+        _check(math.isfinite(value) and value > 0, name, "a number > 0", value)
+
+
+def _fraction(obj: object, *names: str) -> None:
+    for name in names:
+        value = getattr(obj, name)
+        _check(0.0 <= value <= 1.0, name, "a fraction in [0, 1]", value)
+
+
+@dataclass(frozen=True)
+class PitchParams:
+    """Vanishing-point pitch detector and horizon tracking (paper 000, II-A)."""
+
+    sobel_threshold: float = 60.0  # |vertical Sobel| above this is an edge (paper: "a given threshold")
+    min_cluster_px: int = 40  # paper 000: "40 pixels in the current setup"
+    merge_angle_rad: float = 0.02  # paper 000: "a 0.02 radians threshold"
+    lines_kept: int = 7  # paper 000: "only the 7 lines with the highest confidence"
+    vp_region_px: float = 40.0  # half-size of the region around the calibrated vanishing point
+    min_confidence: float = 200.0  # below this summed weight, horizon tracking takes over
+    max_tracking_offset_px: int = 20  # largest row shift searched by horizon tracking
+
+    def __post_init__(self) -> None:
+        _positive(self, "sobel_threshold", "merge_angle_rad", "vp_region_px", "min_confidence")
+        _check(self.min_cluster_px >= 2, "min_cluster_px", "an integer >= 2", self.min_cluster_px)
+        _check(self.lines_kept >= 2, "lines_kept", "an integer >= 2", self.lines_kept)
+        _check(self.max_tracking_offset_px >= 0, "max_tracking_offset_px", ">= 0", self.max_tracking_offset_px)
+
+
+@dataclass(frozen=True)
+class MotionStereoParams:
+    """Bird's-eye motion stereo (paper 000, II-B)."""
+
+    x_min_m: float = 4.0
+    x_max_m: float = 40.0  # the radars of paper 000 reach 40 m
+    y_half_width_m: float = 10.0
+    cell_m: float = 0.1  # "chosen considering odometry accuracy"
+    mean_window_px: int = 3  # paper 000: "a square area (3x3)"
+    threshold_xi: float = 20.0  # paper 000: threshold xi on the local mean m_i (grey levels)
+    weight_obstacle: float = 0.25  # paper 000 eq. 7, w_i when m_i > xi
+    weight_free: float = 1.0  # paper 000 eq. 7, w_i when m_i < xi
+
+    def __post_init__(self) -> None:
+        _positive(self, "x_max_m", "y_half_width_m", "cell_m", "threshold_xi")
+        _check(0 <= self.x_min_m < self.x_max_m, "x_min_m", f"0 <= x_min_m < x_max_m={self.x_max_m}", self.x_min_m)
+        _check(self.mean_window_px >= 1 and self.mean_window_px % 2 == 1, "mean_window_px", "an odd integer >= 1", self.mean_window_px)
+        _fraction(self, "weight_obstacle", "weight_free")
+
+
+@dataclass(frozen=True)
+class VehicleParams:
+    """Radar-guided vehicle detection by vertical symmetry (paper 001, II)."""
+
+    search_width_m: float = 2.5  # paper 001: "the chosen interest area width is 2.5 meters"
+    search_height_ratio: float = 0.5  # paper 001: "area height is ... half of its width"
+    search_bottom_fraction: float = 0.3  # paper 001: bottom at 30% of area height below the radar point
+    resampled_width_px: int = 64  # fixed size of the resampled area (paper: "a fixed size")
+    max_half_width_px: int = 32  # largest symmetry half-width
+    symmetry_threshold: float = 0.5  # chi over which a width is taken as the vehicle width
+    refined_error_m: float = 0.40  # paper 001, III: "an error lower than 40 centimeters"
+    min_width_m: float = 1.2  # world-size filter: narrowest vehicle
+    max_width_m: float = 3.0  # world-size filter: widest vehicle
+    default_height_ratio: float = 0.8  # box height / width when the top is not found (paper 001, fig. 7.b)
+
+    def __post_init__(self) -> None:
+        _positive(self, "search_width_m", "search_height_ratio", "symmetry_threshold", "refined_error_m", "default_height_ratio")
+        _fraction(self, "search_bottom_fraction")
+        _check(self.resampled_width_px >= 8, "resampled_width_px", "an integer >= 8", self.resampled_width_px)
+        _check(1 <= self.max_half_width_px <= self.resampled_width_px, "max_half_width_px", f"1..resampled_width_px={self.resampled_width_px}", self.max_half_width_px)
+        _check(0 < self.min_width_m < self.max_width_m, "min_width_m", f"0 < min_width_m < max_width_m={self.max_width_m}", self.min_width_m)
+
+
+@dataclass(frozen=True)
+class GuardRailParams:
+    """Guard-rail filter for slow radar objects and overlapping boxes (paper 002)."""
+
+    max_speed_mps: float = 5.0  # paper 002: "lower than 5 m/s"
+    sobel_threshold: float = 20.0  # paper 002: "a very low threshold on module"
+    max_holes: int = 5  # paper 002: "a maximum of 5 holes is allowed"
+    min_length_fraction: float = 0.5  # paper 002: "longer than 50% of the searching area"
+    overlap_fraction: float = 0.5  # paper 002: "overlapped ... more than a threshold"
+
+    def __post_init__(self) -> None:
+        _positive(self, "max_speed_mps", "sobel_threshold")
+        _check(self.max_holes >= 0, "max_holes", "an integer >= 0", self.max_holes)
+        _fraction(self, "min_length_fraction", "overlap_fraction")
+
+
+@dataclass(frozen=True)
+class PedestrianParams:
+    """Symmetry pedestrian detection and its fusion filters (paper 000, II-D)."""
+
+    min_height_m: float = 0.9
+    max_height_m: float = 2.1
+    min_distance_m: float = 3.0
+    max_distance_m: float = 40.0
+    aspect_min: float = 0.2  # width / height of a human box
+    aspect_max: float = 0.6
+    symmetry_threshold: float = 0.5
+    min_obstacle_fraction: float = 0.2  # share of a box marked by motion stereo to keep it
+
+    def __post_init__(self) -> None:
+        _positive(self, "min_height_m", "min_distance_m", "aspect_min", "symmetry_threshold")
+        _check(self.max_height_m > self.min_height_m, "max_height_m", f"> min_height_m={self.min_height_m}", self.max_height_m)
+        _check(self.max_distance_m > self.min_distance_m, "max_distance_m", f"> min_distance_m={self.min_distance_m}", self.max_distance_m)
+        _check(self.aspect_max > self.aspect_min, "aspect_max", f"> aspect_min={self.aspect_min}", self.aspect_max)
+        _fraction(self, "min_obstacle_fraction")
+
+
+@dataclass(frozen=True)
+class TrackingParams:
+    """Temporal confirmation (beyond the papers: paper 002's "simple time correlation")."""
+
+    confirm_frames: int = 3
+    max_missed_frames: int = 3
+    gate_m: float = 2.0
+
+    def __post_init__(self) -> None:
+        _check(self.confirm_frames >= 1, "confirm_frames", "an integer >= 1", self.confirm_frames)
+        _check(self.max_missed_frames >= 0, "max_missed_frames", "an integer >= 0", self.max_missed_frames)
+        _positive(self, "gate_m")
+
+
+@dataclass(frozen=True)
+class Params:
+    """The whole configuration: one value per stage."""
+
+    pitch: PitchParams = field(default_factory=PitchParams)
+    motion_stereo: MotionStereoParams = field(default_factory=MotionStereoParams)
+    vehicle: VehicleParams = field(default_factory=VehicleParams)
+    guardrail: GuardRailParams = field(default_factory=GuardRailParams)
+    pedestrian: PedestrianParams = field(default_factory=PedestrianParams)
+    tracking: TrackingParams = field(default_factory=TrackingParams)
+
+    def with_value(self, dotted: str, value: object) -> Params:
+        """A copy with one leaf replaced, e.g. `with_value("pitch.merge_angle_rad", 0.03)`."""
+        data = to_dict(self)
+        node: dict[str, Any] = data
+        parts = dotted.split(".")
+        for part in parts[:-1]:
+            if not isinstance(node.get(part), dict):
+                raise ParamsError(f"{dotted}: no such parameter group {part!r}")
+            node = node[part]
+        if parts[-1] not in node or isinstance(node[parts[-1]], dict):
+            raise ParamsError(f"{dotted}: no such parameter")
+        node[parts[-1]] = value
+        return from_dict(data)
+
+
+T = TypeVar("T")
+
+
+def to_dict(value: object) -> dict[str, Any]:
+    """Nested plain dict of a parameter dataclass (YAML-ready)."""
+    if not dataclasses.is_dataclass(value) or isinstance(value, type):
+        raise TypeError(f"to_dict: expected a dataclass instance, got {type(value).__name__}")
+    return dataclasses.asdict(value)
+
+
+def _coerce(path: str, tp: Any, raw: object) -> object:
+    if dataclasses.is_dataclass(tp) and isinstance(tp, type):
+        if not isinstance(raw, dict):
+            raise ParamsError(f"{path}: expected a mapping of parameters, got {raw!r}")
+        return _build(tp, raw, path)
+    if tp is bool:
+        _check(isinstance(raw, bool), path, "true or false", raw)
+        return raw
+    if tp is int:
+        _check(isinstance(raw, int) and not isinstance(raw, bool), path, "an integer", raw)
+        return raw
+    if tp is float:
+        _check(isinstance(raw, (int, float)) and not isinstance(raw, bool), path, "a number", raw)
+        return float(typing.cast(float, raw))
+    if tp is str:
+        _check(isinstance(raw, str), path, "a string", raw)
+        return raw
+    if typing.get_origin(tp) in (typing.Union, types.UnionType):
+        for option in typing.get_args(tp):
+            if option is type(None) and raw is None:
+                return None
+        options = [a for a in typing.get_args(tp) if a is not type(None)]
+        return _coerce(path, options[0], raw)
+    raise ParamsError(f"{path}: unsupported parameter type {tp!r}")
+
+
+def _build(cls: type[T], raw: dict[str, Any], prefix: str = "") -> T:
+    hints = typing.get_type_hints(cls)
+    fields = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+    unknown = sorted(set(raw) - fields)
+    if unknown:
+        where = f"{prefix}." if prefix else ""
+        raise ParamsError(
+            f"{where}{unknown[0]}: unknown parameter; known here: {', '.join(sorted(fields))}"
+        )
+    kwargs = {
+        name: _coerce(f"{prefix}.{name}" if prefix else name, hints[name], value)
+        for name, value in raw.items()
+    }
+    try:
+        return cls(**kwargs)
+    except ParamsError as err:
+        raise ParamsError(f"{prefix}.{err}" if prefix else str(err)) from None
+
+
+def from_dict(raw: dict[str, Any]) -> Params:
+    """Params from a nested dict; missing keys take their defaults."""
+    return _build(Params, raw)
+
+
+def save_params(params: Params, path: Path | str) -> None:
+    """Write `params` as YAML, with a format version."""
+    data = {"format_version": PARAMS_FORMAT_VERSION, **to_dict(params)}
+    Path(path).write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+
+
+def load_params(path: Path | str) -> Params:
+    """Read a YAML parameter file; raises ParamsError naming the file and the field."""
+    p = Path(path)
+    try:
+        raw = yaml.safe_load(p.read_text(encoding="utf-8"))
+    except OSError as err:
+        raise ParamsError(f"{p}: cannot read parameter file: {err.strerror}") from err
+    except yaml.YAMLError as err:
+        raise ParamsError(f"{p}: not valid YAML: {err}") from err
+    if raw is None:
+        raw = {}
+    if not isinstance(raw, dict):
+        raise ParamsError(f"{p}: expected a mapping of parameter groups, got {type(raw).__name__}")
+    version = raw.pop("format_version", PARAMS_FORMAT_VERSION)
+    if version != PARAMS_FORMAT_VERSION:
+        raise ParamsError(f"{p}: format_version: expected {PARAMS_FORMAT_VERSION}, got {version!r}")
+    try:
+        return from_dict(raw)
+    except ParamsError as err:
+        raise ParamsError(f"{p}: {err}") from None
