@@ -1,0 +1,140 @@
+"""Pure drawing functions for the camera panel: grey frame in, RGB picture with overlays out.
+
+Every function takes an image and returns a new one; nothing here keeps state or talks to
+the browser, so each overlay is tested on plain arrays. Geometry is the camera model's:
+radar targets and the horizon are placed where `core.camera.CameraModel` says.
+
+Images: grey (H, W) uint8; RGB (H, W, 3) uint8, indexed [row, col]; pixels (u, v) =
+(column, row) as in `core.camera`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+
+from core.camera import CameraModel
+from core.io.frame import RadarTarget
+from core.io.groundtruth import FrameTruth
+
+RgbImage = npt.NDArray[np.uint8]
+GreyImage = npt.NDArray[np.uint8]
+Rgb = tuple[int, int, int]
+
+RADAR_COLOUR: Rgb = (255, 220, 0)
+HORIZON_COLOUR: Rgb = (0, 200, 255)
+GUARD_RAIL_COLOUR: Rgb = (255, 140, 0)
+TEXT_COLOUR: Rgb = (255, 255, 255)
+STRIP_COLOUR: Rgb = (32, 32, 32)
+CLASS_COLOURS: dict[str, Rgb] = {
+    "car": (60, 140, 255),
+    "van": (0, 190, 190),
+    "truck": (160, 90, 255),
+    "pedestrian": (255, 60, 60),
+    "cyclist": (255, 90, 200),
+    "pole": (150, 150, 150),
+    "tree": (60, 180, 60),
+    "sign": (230, 230, 60),
+    "other": (200, 200, 200),
+}
+
+RADAR_CROSS_SIZE_PX = 14
+LINE_THICKNESS_PX = 2
+FONT = cv2.FONT_HERSHEY_SIMPLEX
+FONT_SCALE = 0.45
+STRIP_HEIGHT_PX = 24
+TEXT_MARGIN_PX = 6
+
+
+def grey_to_rgb(image: GreyImage) -> RgbImage:
+    """(H, W) uint8 grey -> (H, W, 3) uint8 RGB with equal channels."""
+    if image.dtype != np.uint8 or image.ndim != 2:
+        raise ValueError(
+            f"image: expected an (H, W) uint8 grey image, got {image.dtype} {image.shape}"
+        )
+    return np.repeat(image[:, :, None], 3, axis=2)
+
+
+def _label(out: RgbImage, text: str, u_px: int, v_bottom_px: int, colour: Rgb) -> None:
+    """Text on a filled tag whose bottom-left corner is (u_px, v_bottom_px)."""
+    (w, h), baseline = cv2.getTextSize(text, FONT, FONT_SCALE, 1)
+    top = max(v_bottom_px - h - baseline, 0)
+    cv2.rectangle(out, (u_px, top), (u_px + w + 2, top + h + baseline), colour, cv2.FILLED)
+    cv2.putText(out, text, (u_px + 1, top + h), FONT, FONT_SCALE, (0, 0, 0), 1, cv2.LINE_AA)
+
+
+def draw_radar(rgb: RgbImage, targets: Sequence[RadarTarget], camera: CameraModel) -> RgbImage:
+    """Crosses where the radar targets' road points (x_m, y_m, 0) project, labelled with range.
+
+    Targets behind the camera are skipped; crosses outside the image are clipped by OpenCV.
+    """
+    out = rgb.copy()
+    if not targets:
+        return out
+    pts_vehicle_m = np.array([[t.x_m, t.y_m, 0.0] for t in targets])
+    uv_px, in_front = camera.project(pts_vehicle_m)
+    for target, (u, v), front in zip(targets, uv_px, in_front, strict=True):
+        if not front:
+            continue
+        centre = (round(u), round(v))
+        cv2.drawMarker(
+            out, centre, RADAR_COLOUR, cv2.MARKER_CROSS, RADAR_CROSS_SIZE_PX, LINE_THICKNESS_PX
+        )
+        cv2.putText(
+            out,
+            f"{target.range_m:.0f}m",
+            (centre[0] + RADAR_CROSS_SIZE_PX // 2 + 2, centre[1] - 2),
+            FONT,
+            FONT_SCALE,
+            RADAR_COLOUR,
+            1,
+            cv2.LINE_AA,
+        )
+    return out
+
+
+def draw_truth(rgb: RgbImage, truth: FrameTruth | None) -> RgbImage:
+    """Ground-truth boxes in their class colour with a "class id" tag, and guard-rail polylines."""
+    out = rgb.copy()
+    if truth is None:
+        return out
+    for rail in truth.guard_rails:
+        if len(rail.polyline_px) < 2:
+            continue
+        pts = np.round(np.array(rail.polyline_px)).astype(np.int32).reshape(-1, 1, 2)
+        cv2.polylines(out, [pts], False, GUARD_RAIL_COLOUR, LINE_THICKNESS_PX)
+    for obj in truth.objects:
+        colour = CLASS_COLOURS[obj.cls]
+        u0, v0, u1, v1 = (round(c) for c in obj.box_px)
+        cv2.rectangle(out, (u0, v0), (u1, v1), colour, LINE_THICKNESS_PX)
+        _label(out, f"{obj.cls} {obj.id}", u0, v0 - LINE_THICKNESS_PX, colour)
+    return out
+
+
+def draw_horizon(rgb: RgbImage, camera: CameraModel) -> RgbImage:
+    """The road plane's vanishing line from the left to the right image border."""
+    out = rgb.copy()
+    right_px = out.shape[1] - 1
+    v_left = camera.horizon_row_px(0.0)
+    v_right = camera.horizon_row_px(float(right_px))
+    cv2.line(
+        out, (0, round(v_left)), (right_px, round(v_right)), HORIZON_COLOUR, 1
+    )
+    return out
+
+
+def add_caption(rgb: RgbImage, text: str) -> RgbImage:
+    """The image with a dark strip of `STRIP_HEIGHT_PX` rows below it holding one line of text."""
+    h, w = rgb.shape[:2]
+    out = np.empty((h + STRIP_HEIGHT_PX, w, 3), dtype=np.uint8)
+    out[:h] = rgb
+    out[h:] = STRIP_COLOUR
+    (_, text_h), _ = cv2.getTextSize(text, FONT, FONT_SCALE, 1)
+    baseline_row = h + (STRIP_HEIGHT_PX + text_h) // 2
+    cv2.putText(
+        out, text, (TEXT_MARGIN_PX, baseline_row), FONT, FONT_SCALE, TEXT_COLOUR, 1, cv2.LINE_AA
+    )
+    return out

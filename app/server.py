@@ -1,0 +1,182 @@
+"""The inspector's web server: one viser server, a session per client, a render worker per drive.
+
+    serve(recordings_root, recording, host, port)      # `fusionscope serve`, blocks until Ctrl-C
+    server = InspectorServer(root, None, "127.0.0.1", 0); port = server.start(); ...; server.stop()
+
+Only recordings listed by `app.catalog` under the recordings root are opened. A recording
+that cannot be opened is reported on the page of the client that asked for it; the server
+stays up.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import viser
+
+from app.catalog import list_recordings, resolve_recording
+from app.session import ClientSession
+from app.state import ViewState
+from app.view import FrameSource, FrameView, render_view
+from app.worker import RenderWorker
+from core.io.errors import RecordingError
+
+log = logging.getLogger(__name__)
+
+DriveOpener = Callable[[Path], FrameSource]
+
+
+def open_drive(path: Path) -> FrameSource:
+    """`core.io.Drive(path)`, imported on first use."""
+    from core.io import Drive
+
+    drive: FrameSource = Drive(path)
+    return drive
+
+
+@dataclass
+class _OpenDrive:
+    drive: FrameSource
+    worker: RenderWorker[int, ViewState, FrameView]
+
+
+class InspectorServer:
+    """The inspector on `host:port` (port 0: any free port) for recordings under `recordings_root`.
+
+    `recording` names the recording new clients see first (default: the first by name).
+    Raises ValueError when the root is not a folder or `recording` is not under it.
+    """
+
+    def __init__(
+        self,
+        recordings_root: Path,
+        recording: str | None = None,
+        host: str = "127.0.0.1",
+        port: int = 8080,
+        open_drive: DriveOpener = open_drive,
+    ) -> None:
+        self.recordings_root = Path(recordings_root).resolve()
+        self.recordings = list_recordings(self.recordings_root)
+        if recording is not None:
+            resolve_recording(self.recordings_root, recording)
+        self.default_recording = recording or (self.recordings[0] if self.recordings else None)
+        self.host = host
+        self.requested_port = port
+        self._open_drive = open_drive
+        self._drives: dict[str, _OpenDrive] = {}
+        self._sessions: dict[int, ClientSession] = {}
+        self._lock = threading.Lock()
+        self._server: viser.ViserServer | None = None
+
+    @property
+    def port(self) -> int:
+        """The bound port (after `start`)."""
+        if self._server is None:
+            raise RuntimeError("port: the server is not started")
+        return self._server.get_port()
+
+    def start(self) -> int:
+        """Start serving in background threads; returns the bound port."""
+        server = viser.ViserServer(host=self.host, port=self.requested_port, verbose=False)
+        server.gui.configure_theme(
+            control_width="large", show_logo=False, show_share_button=False
+        )
+        server.gui.set_panel_label("fusionscope")
+        server.on_client_connect(self._connect)
+        server.on_client_disconnect(self._disconnect)
+        self._server = server
+        return server.get_port()
+
+    def stop(self) -> None:
+        """Stop playback, workers, drives and the web server."""
+        with self._lock:
+            sessions, self._sessions = list(self._sessions.values()), {}
+            drives, self._drives = list(self._drives.values()), {}
+        for session in sessions:
+            session.close()
+        for entry in drives:
+            entry.worker.stop()
+            entry.drive.close()
+        if self._server is not None:
+            self._server.stop()
+            self._server = None
+
+    # --- clients ------------------------------------------------------------------------
+    def _connect(self, client: viser.ClientHandle) -> None:
+        session = ClientSession(
+            client, self.recordings, self.default_recording, self._show_recording
+        )
+        with self._lock:
+            self._sessions[client.client_id] = session
+        if self.default_recording is None:
+            session.show_error(
+                f"No recordings (folders with recording.yaml) under {self.recordings_root}."
+            )
+        else:
+            self._show_recording(session, self.default_recording)
+
+    def _disconnect(self, client: viser.ClientHandle) -> None:
+        with self._lock:
+            session = self._sessions.pop(client.client_id, None)
+            drives = list(self._drives.values())
+        if session is not None:
+            session.close()
+        for entry in drives:
+            entry.worker.forget(client.client_id)
+
+    def _show_recording(self, session: ClientSession, name: str) -> None:
+        try:
+            entry = self._drive(name)
+        except (RecordingError, ValueError) as err:
+            session.show_error(f"`{name}`: {err}")
+            return
+        except Exception as err:  # any reader failure must reach the page, not end the server
+            log.exception("opening recording %s failed", name)
+            session.show_error(f"`{name}`: {type(err).__name__}: {err}")
+            return
+        client_id = session.client.client_id
+        session.show_drive(
+            name,
+            len(entry.drive),
+            entry.drive.frame_rate_hz,
+            lambda state: entry.worker.submit(client_id, state),
+        )
+
+    # --- drives -------------------------------------------------------------------------
+    def _drive(self, name: str) -> _OpenDrive:
+        """The open drive `name` with its render worker, opened on first use."""
+        with self._lock:
+            if name in self._drives:
+                return self._drives[name]
+            drive = self._open_drive(resolve_recording(self.recordings_root, name))
+
+            def render(state: ViewState) -> FrameView:
+                return render_view(drive, state)
+
+            def publish(client_id: int, _: ViewState, view: FrameView) -> None:
+                session = self._sessions.get(client_id)
+                if session is not None:
+                    session.show_view(name, view)
+
+            entry = _OpenDrive(drive, RenderWorker(render, publish, name=f"render-{name}"))
+            self._drives[name] = entry
+            return entry
+
+
+def serve(recordings_root: Path, recording: str | None, host: str, port: int) -> None:
+    """Run the inspector until Ctrl-C."""
+    inspector = InspectorServer(recordings_root, recording, host, port)
+    bound = inspector.start()
+    print(f"fusionscope inspector: http://{host}:{bound}  (Ctrl-C to stop)")
+    try:
+        while True:
+            time.sleep(1.0)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        inspector.stop()

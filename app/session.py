@@ -1,0 +1,204 @@
+"""One browser tab: its controls, its `ViewState`, its playback thread, its camera panel.
+
+Controls only replace the state and ask for a render; the render worker draws, and
+`show_view` puts a finished picture and its read-out on the page in one atomic update.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from dataclasses import replace
+
+import viser
+
+from app.state import Layers, ViewState
+from app.view import FrameView
+
+CAMERA_PANEL_WIDTH_PX = 680
+WAITING_TEXT = "rendering…"
+
+
+class ClientSession:
+    """The inspector as one client sees it.
+
+    `on_pick_recording(session, name)` is called when the client picks another recording;
+    the server answers with `show_drive` or `show_error`. `show_drive` gets `request`, which
+    hands a state snapshot to the drive's render worker.
+    """
+
+    def __init__(
+        self,
+        client: viser.ClientHandle,
+        recordings: list[str],
+        selected: str | None,
+        on_pick_recording: Callable[[ClientSession, str], None],
+    ) -> None:
+        self.client = client
+        self.recording: str | None = None
+        self._lock = threading.RLock()
+        self._state = ViewState()
+        self._frame_count = 0
+        self._frame_rate_hz = 0.0
+        self._request: Callable[[ViewState], None] | None = None
+        self._stop_playing = threading.Event()
+        self._player: threading.Thread | None = None
+        self._on_pick_recording = on_pick_recording
+
+        gui = client.gui
+        self._message = gui.add_markdown("", order=0)
+        self._picker = gui.add_dropdown(
+            "recording",
+            tuple(recordings) or ("(none)",),
+            initial_value=selected or (recordings[0] if recordings else "(none)"),
+            disabled=not recordings,
+            order=1,
+        )
+        self._picker.on_update(lambda _: self._on_pick_recording(self, self._picker.value))
+        self._timeline: viser.GuiFolderHandle | None = None
+        self._slider: viser.GuiSliderHandle[int] | None = None
+        self._play: viser.GuiButtonHandle | None = None
+        self._readout: viser.GuiMarkdownHandle | None = None
+
+        with gui.add_folder("Layers", order=3):
+            self._layer_boxes = {
+                "radar": gui.add_checkbox("radar", self._state.layers.radar),
+                "truth": gui.add_checkbox("ground truth", self._state.layers.truth),
+                "horizon": gui.add_checkbox("horizon", self._state.layers.horizon),
+            }
+        for box in self._layer_boxes.values():
+            box.on_update(lambda _: self._set_layers())
+
+        gui.main_panel.dock_left()
+        self._camera_panel = gui.add_panel()
+        self._camera_tab = self._camera_panel.add_tab("Camera")
+        self._camera_panel.dock_right()
+        self._camera_panel.set_width(CAMERA_PANEL_WIDTH_PX)
+        self._image: viser.GuiImageHandle | None = None
+
+    # --- what the server tells this client ----------------------------------------------
+    def show_error(self, message: str) -> None:
+        """Replace the drive controls with a message saying what is wrong."""
+        self._drop_drive()
+        self._message.content = f"**Cannot show this recording.**\n\n{message}"
+
+    def show_drive(
+        self,
+        name: str,
+        frame_count: int,
+        frame_rate_hz: float,
+        request: Callable[[ViewState], None],
+    ) -> None:
+        """Build the timeline for a drive of `frame_count` frames and render its first frame."""
+        self._drop_drive()
+        gui = self.client.gui
+        with self._lock:
+            self.recording = name
+            self._frame_count = frame_count
+            self._frame_rate_hz = frame_rate_hz
+            self._request = request
+            self._state = replace(self._state, frame=0, playing=False)
+        self._message.content = f"**{name}** — {frame_count} frames at {frame_rate_hz:.1f} Hz"
+        if frame_count == 0:
+            return
+        with gui.add_folder("Timeline", order=2) as self._timeline:
+            self._slider = gui.add_slider("frame", 0, max(frame_count - 1, 0), 1, 0)
+            self._play = gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY)
+            step_back = gui.add_button("Step -1", icon=viser.Icon.CHEVRON_LEFT)
+            step_on = gui.add_button("Step +1", icon=viser.Icon.CHEVRON_RIGHT)
+            self._readout = gui.add_markdown(WAITING_TEXT)
+        self._slider.on_update(lambda event: self.go_to(event.target.value))
+        self._play.on_click(lambda _: self.set_playing(not self._state.playing))
+        step_back.on_click(lambda _: self.step(-1))
+        step_on.on_click(lambda _: self.step(+1))
+        self._submit()
+
+    def show_view(self, recording: str, view: FrameView) -> None:
+        """Put a rendered frame and its read-out on the page together (if still wanted)."""
+        if recording != self.recording or self._readout is None:
+            return
+        with self.client.atomic():
+            if self._image is None:
+                with self._camera_tab:
+                    self._image = self.client.gui.add_image(view.image, format="jpeg")
+            else:
+                self._image.image = view.image
+            self._readout.content = f"`{view.readout}`"
+
+    # --- controls -> state ----------------------------------------------------------------
+    def go_to(self, frame: int) -> None:
+        """Show `frame` (clamped to the drive)."""
+        with self._lock:
+            if self._frame_count == 0:
+                return
+            frame = min(max(frame, 0), self._frame_count - 1)
+            if frame == self._state.frame:
+                return
+            self._state = replace(self._state, frame=frame)
+        if self._slider is not None:
+            self._slider.value = frame
+        self._submit()
+
+    def step(self, delta: int) -> None:
+        self.go_to(self._state.frame + delta)
+
+    def set_playing(self, playing: bool) -> None:
+        """Start or stop playback at the drive's frame rate."""
+        with self._lock:
+            if playing == self._state.playing or self._frame_count == 0:
+                return
+            self._state = replace(self._state, playing=playing)
+            if playing:
+                self._stop_playing = threading.Event()
+                self._player = threading.Thread(
+                    target=self._play_loop,
+                    args=(self._stop_playing, 1.0 / self._frame_rate_hz),
+                    name=f"player-{self.client.client_id}",
+                    daemon=True,
+                )
+                self._player.start()
+            else:
+                self._stop_playing.set()
+        if self._play is not None:
+            self._play.label = "Pause" if playing else "Play"
+            self._play.icon = viser.Icon.PLAYER_PAUSE if playing else viser.Icon.PLAYER_PLAY
+
+    def close(self) -> None:
+        """The client left: stop playback."""
+        self._stop_playing.set()
+
+    # --- internals ---------------------------------------------------------------------
+    def _play_loop(self, stop: threading.Event, period_s: float) -> None:
+        """Advance the state one frame per period until paused or at the last frame."""
+        while not stop.wait(period_s):
+            if self._state.frame >= self._frame_count - 1:
+                self.set_playing(False)
+                return
+            self.step(+1)
+
+    def _set_layers(self) -> None:
+        boxes = self._layer_boxes
+        layers = Layers(
+            radar=boxes["radar"].value, truth=boxes["truth"].value, horizon=boxes["horizon"].value
+        )
+        with self._lock:
+            self._state = replace(self._state, layers=layers)
+        self._submit()
+
+    def _submit(self) -> None:
+        with self._lock:
+            request, state = self._request, self._state
+        if request is not None:
+            request(state)
+
+    def _drop_drive(self) -> None:
+        self.set_playing(False)
+        with self._lock:
+            self.recording = None
+            self._request = None
+            self._frame_count = 0
+        if self._timeline is not None:
+            self._timeline.remove()
+        if self._image is not None:
+            self._image.remove()
+        self._timeline = self._slider = self._play = self._readout = self._image = None

@@ -1,0 +1,80 @@
+"""A render worker that always works on the newest request.
+
+Each client has one pending slot: a request that arrives while the worker is busy replaces
+the one waiting for that client, so dragging the timeline renders the frame under the
+cursor, not the hundreds it passed over. One worker per drive also makes it the only reader
+of that drive, so readers need not be thread-safe.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable, Hashable
+from typing import Generic, TypeVar
+
+Key = TypeVar("Key", bound=Hashable)
+Request = TypeVar("Request")
+Result = TypeVar("Result")
+
+log = logging.getLogger(__name__)
+
+
+class RenderWorker(Generic[Key, Request, Result]):
+    """Runs `render(request)` on a background thread, then `publish(key, request, result)`.
+
+    `submit(key, request)` never blocks; of the requests submitted for one key while the
+    worker is busy only the last is rendered. Keys (clients) are served in the order their
+    first pending request came. An exception from `render` or `publish` is logged with its
+    traceback and the worker goes on with the next request.
+    """
+
+    def __init__(
+        self,
+        render: Callable[[Request], Result],
+        publish: Callable[[Key, Request, Result], None],
+        name: str = "render-worker",
+    ) -> None:
+        self._render = render
+        self._publish = publish
+        self._pending: dict[Key, Request] = {}
+        self._wake = threading.Condition()
+        self._stopping = False
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread.start()
+
+    def submit(self, key: Key, request: Request) -> None:
+        """Queue `request` for `key`, replacing any request for `key` not yet started."""
+        with self._wake:
+            self._pending[key] = request
+            self._wake.notify()
+
+    def forget(self, key: Key) -> None:
+        """Drop the pending request of `key` (its client left)."""
+        with self._wake:
+            self._pending.pop(key, None)
+
+    def stop(self, timeout_s: float = 5.0) -> None:
+        """Finish the render in progress, drop pending requests, end the thread."""
+        with self._wake:
+            self._stopping = True
+            self._pending.clear()
+            self._wake.notify()
+        self._thread.join(timeout_s)
+
+    def _next(self) -> tuple[Key, Request] | None:
+        with self._wake:
+            while not self._pending and not self._stopping:
+                self._wake.wait()
+            if self._stopping:
+                return None
+            key = next(iter(self._pending))
+            return key, self._pending.pop(key)
+
+    def _run(self) -> None:
+        while (job := self._next()) is not None:
+            key, request = job
+            try:
+                self._publish(key, request, self._render(request))
+            except Exception:  # a bad frame must not end the worker
+                log.exception("render of %r for %r failed", request, key)
