@@ -1,0 +1,162 @@
+"""`calibration.yaml`: the camera (ROS camera_info style intrinsics + pose) and the radar mount.
+
+Layout (format_version 1):
+
+    format_version: 1
+    camera:                       # as ROS camera_info / camera_calibration_parsers
+      image_width: 640
+      image_height: 480
+      camera_matrix: {rows: 3, cols: 3, data: [fx, 0, cx, 0, fy, cy, 0, 0, 1]}
+      distortion_model: plumb_bob
+      distortion_coefficients: {rows: 1, cols: 5, data: [k1, k2, p1, p2, k3]}   # data may be []
+    extrinsics: {height_m: 1.2, x_m: 1.5, y_m: 0.0, pitch_rad: 0.01, yaw_rad: 0.0, roll_rad: 0.0}
+    rows_used_px: [90, 390]       # [first, stop) rows the engine processes; null: all
+    radar_mount: {x_m: 3.6, y_m: 0.0, z_m: 0.5, yaw_rad: 0.0}
+
+Vehicle frame: x forward, y left, z up, metres, origin on the road under the reference point.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from core.camera import CameraModel, Extrinsics, Intrinsics
+from core.io.errors import RecordingError
+from core.io.yamlfile import Fields, load_yaml_mapping
+
+CALIBRATION_FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class RadarMount:
+    """Radar position (m) and yaw (rad, positive to the left) in the vehicle frame."""
+
+    x_m: float
+    y_m: float
+    z_m: float = 0.0
+    yaw_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("x_m", "y_m", "z_m", "yaw_rad"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"{name}: expected a finite number, got {getattr(self, name)!r}")
+
+
+@dataclass(frozen=True)
+class Calibration:
+    camera: CameraModel
+    radar_mount: RadarMount
+
+
+def calibration_to_dict(cal: Calibration) -> dict[str, Any]:
+    """The YAML-ready mapping of `cal` (layout in the module docstring)."""
+    i, e = cal.camera.intrinsics, cal.camera.extrinsics
+    rows = cal.camera.rows_used_px
+    return {
+        "format_version": CALIBRATION_FORMAT_VERSION,
+        "camera": {
+            "image_width": i.width_px,
+            "image_height": i.height_px,
+            "camera_matrix": {"rows": 3, "cols": 3, "data": [float(v) for v in i.K.ravel()]},
+            "distortion_model": "plumb_bob" if len(i.distortion) <= 5 else "rational_polynomial",
+            "distortion_coefficients": {
+                "rows": 1,
+                "cols": len(i.distortion),
+                "data": [float(v) for v in i.distortion],
+            },
+        },
+        "extrinsics": {
+            "height_m": e.height_m,
+            "x_m": e.x_m,
+            "y_m": e.y_m,
+            "pitch_rad": e.pitch_rad,
+            "yaw_rad": e.yaw_rad,
+            "roll_rad": e.roll_rad,
+        },
+        "rows_used_px": None if rows is None else [int(rows[0]), int(rows[1])],
+        "radar_mount": {
+            "x_m": cal.radar_mount.x_m,
+            "y_m": cal.radar_mount.y_m,
+            "z_m": cal.radar_mount.z_m,
+            "yaw_rad": cal.radar_mount.yaw_rad,
+        },
+    }
+
+
+def save_calibration(cal: Calibration, path: Path | str) -> None:
+    Path(path).write_text(
+        yaml.safe_dump(calibration_to_dict(cal), sort_keys=False), encoding="utf-8"
+    )
+
+
+def _matrix(f: Fields, name: str, rows: int | None, cols: int | None) -> tuple[float, ...]:
+    m = f.sub(name)
+    m.check_keys({"data"}, {"rows", "cols"})
+    n = None if rows is None or cols is None else rows * cols
+    return m.floats("data", n)
+
+
+def load_calibration(path: Path | str) -> Calibration:
+    """Read `calibration.yaml`; RecordingError names the file and the key on bad input."""
+    p = Path(path)
+    f = Fields(p, load_yaml_mapping(p, "calibration"))
+    f.check_keys({"camera", "extrinsics", "radar_mount"}, {"format_version", "rows_used_px"})
+    if f.raw.get("format_version", CALIBRATION_FORMAT_VERSION) != CALIBRATION_FORMAT_VERSION:
+        raise f.fail("format_version", str(CALIBRATION_FORMAT_VERSION), f.raw["format_version"])
+
+    c = f.sub("camera")
+    c.check_keys(
+        {"image_width", "image_height", "camera_matrix"},
+        {"distortion_model", "distortion_coefficients", "camera_name"},
+    )
+    K = _matrix(c, "camera_matrix", 3, 3)
+    distortion = (
+        _matrix(c, "distortion_coefficients", None, None)
+        if c.has("distortion_coefficients")
+        else ()
+    )
+    if all(v == 0.0 for v in distortion):
+        distortion = ()
+
+    e = f.sub("extrinsics")
+    e.check_keys({"height_m"}, {"x_m", "y_m", "pitch_rad", "yaw_rad", "roll_rad"})
+    r = f.sub("radar_mount")
+    r.check_keys({"x_m", "y_m"}, {"z_m", "yaw_rad"})
+    rows: tuple[int, int] | None = None
+    if f.has("rows_used_px"):
+        first_stop = f.floats("rows_used_px", 2)
+        if not all(v.is_integer() for v in first_stop):
+            raise f.fail("rows_used_px", "two integer rows [first, stop]", f.raw["rows_used_px"])
+        rows = (int(first_stop[0]), int(first_stop[1]))
+
+    def opt(fields: Fields, name: str) -> float:
+        return fields.float_(name) if name in fields.raw else 0.0
+
+    try:
+        intrinsics = Intrinsics(
+            fx_px=K[0],
+            fy_px=K[4],
+            cx_px=K[2],
+            cy_px=K[5],
+            width_px=c.int_("image_width"),
+            height_px=c.int_("image_height"),
+            distortion=distortion,
+        )
+        extrinsics = Extrinsics(
+            height_m=e.float_("height_m"),
+            x_m=opt(e, "x_m"),
+            y_m=opt(e, "y_m"),
+            pitch_rad=opt(e, "pitch_rad"),
+            yaw_rad=opt(e, "yaw_rad"),
+            roll_rad=opt(e, "roll_rad"),
+        )
+        camera = CameraModel(intrinsics, extrinsics, rows)
+        mount = RadarMount(r.float_("x_m"), r.float_("y_m"), opt(r, "z_m"), opt(r, "yaw_rad"))
+    except ValueError as err:
+        raise RecordingError(f"{p}: {err}") from err
+    return Calibration(camera, mount)

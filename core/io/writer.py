@@ -1,0 +1,243 @@
+"""RecordingWriter: writes a recording folder (the synthetic generator's output format).
+
+    with RecordingWriter(out_dir, name="highway", calibration=cal) as w:
+        w.add_image(t_ns, image)                 # (H, W) uint8 -> PNG CompressedImage
+        w.add_radar_scan(t_ns, targets)          # -> radar_msgs/RadarScan
+        w.add_vehicle_state(t_ns, speed_mps, yaw_rate_radps)   # -> BLF frames via vehicle.dbc
+        w.set_groundtruth(frames)
+
+The same calls give byte-identical files: no wall-clock time is written anywhere.
+
+Notes:
+    python-can's BLFWriter puts the first frame's time in the file header and stores frame
+    times relative to it, but writes (and reads back) a zero header date for times before
+    1990; a recording clock starting near 0 would then come back shifted. The writer fixes
+    the BLF start time to 0, so frame times are stored as absolute recording-clock times.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+from collections.abc import Mapping, Sequence
+from importlib import resources
+from pathlib import Path
+from types import TracebackType
+from typing import Any, Literal
+
+import can
+import cv2
+import numpy as np
+import numpy.typing as npt
+from rosbags.rosbag2 import StoragePlugin, Writer
+
+from core.io import radar_msgs
+from core.io.calibration import Calibration, save_calibration
+from core.io.canlog import SPEED_UNITS_TO_MPS, YAW_RATE_UNITS_TO_RADPS, SignalMapping, load_dbc
+from core.io.errors import RecordingError
+from core.io.frame import RadarTarget
+from core.io.groundtruth import FrameTruth, write_groundtruth
+from core.io.manifest import (
+    MANIFEST_NAME,
+    BagStream,
+    CanSource,
+    Manifest,
+    save_manifest,
+)
+
+CAMERA_TOPIC = "/camera/image/compressed"
+RADAR_TOPIC = "/radar/scan"
+CAMERA_FRAME_ID = "camera"
+RADAR_FRAME_ID = "radar"
+PNG_FORMAT = "mono8; png compressed mono8"
+BAG_DIR = "bag"
+CAN_LOG = "vehicle.blf"
+DBC_NAME = "vehicle.dbc"
+CALIBRATION_NAME = "calibration.yaml"
+GROUNDTRUTH_NAME = "groundtruth.json"
+BAG_VERSION: Literal[9] = 9
+
+SPEED_SIGNAL = SignalMapping("SPEED", "SPEED", "km/h", SPEED_UNITS_TO_MPS["km/h"])
+YAW_RATE_SIGNAL = SignalMapping("KINEMATICS", "YAW_RATE", "deg/s", YAW_RATE_UNITS_TO_RADPS["deg/s"])
+SPEED_COUNTER = "ENCODER"
+COUNTER_MODULO = 256
+
+
+def vehicle_dbc_path() -> Path:
+    """The synthetic car's DBC shipped with the package."""
+    return Path(str(resources.files("core.io") / "data" / DBC_NAME))
+
+
+class RecordingWriter:
+    """Writes one recording folder; a context manager (the files are complete after close)."""
+
+    def __init__(
+        self,
+        out_dir: Path | str,
+        *,
+        name: str,
+        calibration: Calibration,
+        description: str = "",
+        generator: Mapping[str, Any] | None = None,
+    ) -> None:
+        self.out_dir = Path(out_dir)
+        if self.out_dir.exists() and (not self.out_dir.is_dir() or any(self.out_dir.iterdir())):
+            raise RecordingError(
+                f"{self.out_dir}: expected a new or empty folder for the recording, it is not empty"
+            )
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        self.name = name
+        self.description = description
+        self.generator = dict(generator or {})
+        self.calibration = calibration
+        self._truth: list[FrameTruth] | None = None
+        self._can_frames: list[tuple[int, int, bytes]] = []
+        self._closed = False
+
+        store = radar_msgs.typestore()
+        self._store = store
+        self._bag = Writer(
+            self.out_dir / BAG_DIR, version=BAG_VERSION, storage_plugin=StoragePlugin.MCAP
+        )
+        self._bag.open()
+        self._camera = self._bag.add_connection(
+            CAMERA_TOPIC, radar_msgs.COMPRESSED_IMAGE, typestore=store
+        )
+        self._radar = self._bag.add_connection(RADAR_TOPIC, radar_msgs.RADAR_SCAN, typestore=store)
+
+        shutil.copyfile(vehicle_dbc_path(), self.out_dir / DBC_NAME)
+        db = load_dbc([self.out_dir / DBC_NAME])
+        self._speed_msg = db.get_message_by_name(SPEED_SIGNAL.message)
+        self._yaw_msg = db.get_message_by_name(YAW_RATE_SIGNAL.message)
+        self._counter = 0
+
+    # --- context manager ----------------------------------------------------------------
+    def __enter__(self) -> RecordingWriter:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    # --- messages -----------------------------------------------------------------------
+    def _header(self, t_ns: int, frame_id: str) -> Any:
+        types = self._store.types
+        sec, nanosec = divmod(int(t_ns), 1_000_000_000)
+        stamp = types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec)
+        return types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame_id)
+
+    def add_image(self, t_ns: int, image: npt.NDArray[np.uint8]) -> None:
+        """Add a camera frame: (H, W) uint8 grey, the calibration's size; stored as PNG."""
+        i = self.calibration.camera.intrinsics
+        if image.dtype != np.uint8 or image.shape != (i.height_px, i.width_px):
+            raise ValueError(
+                f"image: expected ({i.height_px}, {i.width_px}) uint8 grey as the calibration "
+                f"says, got {image.dtype} {image.shape}"
+            )
+        ok, png = cv2.imencode(".png", image)
+        if not ok:
+            raise RecordingError(f"{self.out_dir}: cannot encode image at t={t_ns} ns as PNG")
+        cls = self._store.types[radar_msgs.COMPRESSED_IMAGE]
+        msg = cls(
+            header=self._header(t_ns, CAMERA_FRAME_ID),
+            format=PNG_FORMAT,
+            data=np.asarray(png, dtype=np.uint8).ravel(),
+        )
+        self._bag.write(
+            self._camera, int(t_ns), self._store.serialize_cdr(msg, radar_msgs.COMPRESSED_IMAGE)
+        )
+
+    def add_radar_scan(self, t_ns: int, targets: Sequence[RadarTarget]) -> None:
+        """Add a radar scan: range, azimuth, range rate and amplitude of each target (float32).
+
+        x_m, y_m and track_id are not stored: the reader derives x/y from the radar mount.
+        """
+        ret_cls = self._store.types[radar_msgs.RADAR_RETURN]
+        f32 = np.float32
+        returns = [
+            ret_cls(
+                range=f32(t.range_m),
+                azimuth=f32(t.azimuth_rad),
+                elevation=f32(0.0),
+                doppler_velocity=f32(t.range_rate_mps),
+                amplitude=f32(t.amplitude),
+            )
+            for t in targets
+        ]
+        msg = self._store.types[radar_msgs.RADAR_SCAN](
+            header=self._header(t_ns, RADAR_FRAME_ID), returns=returns
+        )
+        self._bag.write(
+            self._radar, int(t_ns), self._store.serialize_cdr(msg, radar_msgs.RADAR_SCAN)
+        )
+
+    def add_vehicle_state(self, t_ns: int, speed_mps: float, yaw_rate_radps: float) -> None:
+        """Add one SPEED and one KINEMATICS CAN frame at `t_ns`, quantised as the DBC says.
+
+        Values beyond the DBC's range are clipped to it.
+        """
+        if not (math.isfinite(speed_mps) and math.isfinite(yaw_rate_radps)):
+            raise ValueError(
+                "speed_mps, yaw_rate_radps: expected finite numbers, "
+                f"got {speed_mps}, {yaw_rate_radps}"
+            )
+        speed_sig = self._speed_msg.get_signal_by_name(SPEED_SIGNAL.signal)
+        yaw_sig = self._yaw_msg.get_signal_by_name(YAW_RATE_SIGNAL.signal)
+        kmh = float(np.clip(speed_mps / SPEED_SIGNAL.to_si, speed_sig.minimum, speed_sig.maximum))
+        degs = float(
+            np.clip(yaw_rate_radps / YAW_RATE_SIGNAL.to_si, yaw_sig.minimum, yaw_sig.maximum)
+        )
+        speed_data = self._speed_msg.encode(
+            {SPEED_SIGNAL.signal: kmh, SPEED_COUNTER: self._counter}
+        )
+        yaw_data = self._yaw_msg.encode({YAW_RATE_SIGNAL.signal: degs})
+        self._counter = (self._counter + 1) % COUNTER_MODULO
+        self._can_frames.append((int(t_ns), self._speed_msg.frame_id, bytes(speed_data)))
+        self._can_frames.append((int(t_ns), self._yaw_msg.frame_id, bytes(yaw_data)))
+
+    def set_groundtruth(self, frames: Sequence[FrameTruth]) -> None:
+        """Ground truth per camera frame (written to groundtruth.json on close)."""
+        self._truth = list(frames)
+
+    # --- finish -------------------------------------------------------------------------
+    def _write_can(self) -> None:
+        writer = can.BLFWriter(self.out_dir / CAN_LOG)
+        writer.start_timestamp = 0.0  # see the module Notes
+        for t_ns, frame_id, data in sorted(self._can_frames, key=lambda f: f[0]):
+            writer.on_message_received(
+                can.Message(
+                    timestamp=t_ns / 1e9,
+                    arbitration_id=frame_id,
+                    data=data,
+                    is_extended_id=False,
+                    channel=0,
+                )
+            )
+        writer.stop()
+
+    def close(self) -> None:
+        """Finish the bag and write the CAN log, calibration, ground truth and manifest."""
+        if self._closed:
+            return
+        self._closed = True
+        self._bag.close()
+        self._write_can()
+        save_calibration(self.calibration, self.out_dir / CALIBRATION_NAME)
+        if self._truth is not None:
+            write_groundtruth(self._truth, self.out_dir / GROUNDTRUTH_NAME)
+        manifest = Manifest(
+            folder=self.out_dir,
+            name=self.name,
+            description=self.description,
+            generator=self.generator,
+            camera=BagStream(BAG_DIR, CAMERA_TOPIC),
+            radar=BagStream(BAG_DIR, RADAR_TOPIC),
+            can=CanSource(CAN_LOG, (DBC_NAME,), SPEED_SIGNAL, YAW_RATE_SIGNAL),
+            calibration=CALIBRATION_NAME,
+            groundtruth=GROUNDTRUTH_NAME if self._truth is not None else None,
+        )
+        save_manifest(manifest, self.out_dir / MANIFEST_NAME)
