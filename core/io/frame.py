@@ -73,6 +73,7 @@ class FrameInput:
     def __post_init__(self) -> None:
         if self.image.dtype != np.uint8 or self.image.ndim != 2:
             raise ValueError(
-                f"image: expected an (H, W) uint8 grey image, got {self.image.dtype} {self.image.shape}"
+                "image: expected an (H, W) uint8 grey image, "
+                f"got {self.image.dtype} {self.image.shape}"
             )
         self.image.flags.writeable = False

@@ -104,7 +104,8 @@ def write_groundtruth(frames: Sequence[FrameTruth], path: Path | str) -> None:
 
 
 def _tuple(raw: Any, n: int, where: str) -> tuple[float, ...]:
-    if not isinstance(raw, list) or len(raw) != n or not all(isinstance(v, (int, float)) for v in raw):
+    numbers = isinstance(raw, list) and all(isinstance(v, (int, float)) for v in raw)
+    if not numbers or len(raw) != n:
         raise ValueError(f"{where}: expected a list of {n} numbers, got {raw!r}")
     return tuple(float(v) for v in raw)
 

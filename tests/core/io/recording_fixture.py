@@ -38,8 +38,14 @@ def image(i: int) -> np.ndarray:
 def targets(k: int) -> list[RadarTarget]:
     """Radar scan k: k + 1 targets (scan 0 has one) at known range/azimuth."""
     return [
-        RadarTarget(range_m=20.0 + k + 0.123 * j, azimuth_rad=0.01 * (j - 1),
-                    range_rate_mps=-1.5 + j, amplitude=10.0 + j, x_m=0.0, y_m=0.0)
+        RadarTarget(
+            range_m=20.0 + k + 0.123 * j,
+            azimuth_rad=0.01 * (j - 1),
+            range_rate_mps=-1.5 + j,
+            amplitude=10.0 + j,
+            x_m=0.0,
+            y_m=0.0,
+        )
         for j in range(k + 1)
     ]
 
@@ -54,17 +60,37 @@ def yaw_rate_radps(t_ns: int) -> float:
 
 def truth() -> list[FrameTruth]:
     return [
-        FrameTruth(i, i * CAMERA_PERIOD_NS, 0.01, (
-            TruthObject(1, "car", (5.0 + 8 * i, 10.0, 15.0 + 8 * i, 20.0), (20.0, 0.5, 0.0),
-                        (4.5, 1.8, 1.5), (-1.0, 0.0), True, 0.0),
-        ), ())
-        for i in range(N_FRAMES) if i != 3
+        FrameTruth(
+            i,
+            i * CAMERA_PERIOD_NS,
+            0.01,
+            (
+                TruthObject(
+                    1,
+                    "car",
+                    (5.0 + 8 * i, 10.0, 15.0 + 8 * i, 20.0),
+                    (20.0, 0.5, 0.0),
+                    (4.5, 1.8, 1.5),
+                    (-1.0, 0.0),
+                    True,
+                    0.0,
+                ),
+            ),
+            (),
+        )
+        for i in range(N_FRAMES)
+        if i != 3
     ]
 
 
 def write_recording(out: Path) -> Path:
-    with RecordingWriter(out, name="tiny", description="five known frames",
-                         calibration=CALIBRATION, generator={"scenario": "test", "seed": 1}) as w:
+    with RecordingWriter(
+        out,
+        name="tiny",
+        description="five known frames",
+        calibration=CALIBRATION,
+        generator={"scenario": "test", "seed": 1},
+    ) as w:
         for i in range(N_FRAMES):
             w.add_image(i * CAMERA_PERIOD_NS, image(i))
         for k in range(2 * N_FRAMES):
