@@ -18,7 +18,5 @@ def resolve_recording(root: Path, name: str) -> Path:
     """The folder of recording `name` under `root`; only names `list_recordings` gives."""
     names = list_recordings(root)
     if name not in names:
-        raise ValueError(
-            f"recording: expected one of {names} under {root}, got {name!r}"
-        )
+        raise ValueError(f"recording: expected one of {names} under {root}, got {name!r}")
     return root / name

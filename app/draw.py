@@ -120,9 +120,7 @@ def draw_horizon(rgb: RgbImage, camera: CameraModel) -> RgbImage:
     right_px = out.shape[1] - 1
     v_left = camera.horizon_row_px(0.0)
     v_right = camera.horizon_row_px(float(right_px))
-    cv2.line(
-        out, (0, round(v_left)), (right_px, round(v_right)), HORIZON_COLOUR, 1
-    )
+    cv2.line(out, (0, round(v_left)), (right_px, round(v_right)), HORIZON_COLOUR, 1)
     return out
 
 

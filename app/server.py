@@ -83,9 +83,7 @@ class InspectorServer:
     def start(self) -> int:
         """Start serving in background threads; returns the bound port."""
         server = viser.ViserServer(host=self.host, port=self.requested_port, verbose=False)
-        server.gui.configure_theme(
-            control_width="large", show_logo=False, show_share_button=False
-        )
+        server.gui.configure_theme(control_width="large", show_logo=False, show_share_button=False)
         server.gui.set_panel_label("fusionscope")
         server.on_client_connect(self._connect)
         server.on_client_disconnect(self._disconnect)
@@ -115,7 +113,8 @@ class InspectorServer:
             self._sessions[client.client_id] = session
         if self.default_recording is None:
             session.show_error(
-                f"No recordings (folders with recording.yaml) under {self.recordings_root}."
+                "No recordings to show",
+                f"no folder with a recording.yaml under {self.recordings_root}",
             )
         else:
             self._show_recording(session, self.default_recording)
@@ -133,11 +132,13 @@ class InspectorServer:
         try:
             entry = self._drive(name)
         except (RecordingError, ValueError) as err:
-            session.show_error(f"`{name}`: {err}")
+            session.show_error(f"Cannot show this recording: {name}", str(err))
             return
         except Exception as err:  # any reader failure must reach the page, not end the server
             log.exception("opening recording %s failed", name)
-            session.show_error(f"`{name}`: {type(err).__name__}: {err}")
+            session.show_error(
+                f"Cannot show this recording: {name}", f"{type(err).__name__}: {err}"
+            )
             return
         client_id = session.client.client_id
         session.show_drive(

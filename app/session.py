@@ -77,10 +77,11 @@ class ClientSession:
         self._image: viser.GuiImageHandle | None = None
 
     # --- what the server tells this client ----------------------------------------------
-    def show_error(self, message: str) -> None:
+    def show_error(self, headline: str, detail: str = "") -> None:
         """Replace the drive controls with a message saying what is wrong."""
         self._drop_drive()
-        self._message.content = f"**Cannot show this recording.**\n\n{message}"
+        block = f"\n\n```text\n{detail}\n```" if detail else ""
+        self._message.content = f"**{headline}**{block}"
 
     def show_drive(
         self,
@@ -143,7 +144,9 @@ class ClientSession:
         self.go_to(self._state.frame + delta)
 
     def set_playing(self, playing: bool) -> None:
-        """Start or stop playback at the drive's frame rate."""
+        """Start or stop playback at the drive's frame rate; playing from the end starts over."""
+        if playing and self._state.frame == self._frame_count - 1:
+            self.go_to(0)
         with self._lock:
             if playing == self._state.playing or self._frame_count == 0:
                 return

@@ -56,11 +56,17 @@ class FrameView:
 def readout_text(
     index: int, count: int, t_s: float, speed_mps: float, yaw_rate_radps: float
 ) -> str:
-    """One line: frame index of count, time since the drive's start, speed, yaw rate."""
-    return (
-        f"frame {index} / {count - 1} | t {t_s:.2f} s | "
-        f"{speed_mps * MPS_TO_KMH:.1f} km/h | yaw {math.degrees(yaw_rate_radps):+.2f} deg/s"
+    """One line: frame index of count, time since the drive's start, speed, yaw rate.
+
+    Speed and yaw rate are NaN in recordings without CAN; they read "n/a".
+    """
+    speed = f"{speed_mps * MPS_TO_KMH:.1f} km/h" if math.isfinite(speed_mps) else "speed n/a"
+    yaw = (
+        f"yaw {math.degrees(yaw_rate_radps):+.2f} deg/s"
+        if math.isfinite(yaw_rate_radps)
+        else "yaw n/a"
     )
+    return f"frame {index} / {count - 1} | t {t_s:.2f} s | {speed} | {yaw}"
 
 
 def render_view(drive: FrameSource, state: ViewState) -> FrameView:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +14,15 @@ from core.io.groundtruth import FrameTruth, TruthGuardRail, TruthObject
 
 WIDTH_PX, HEIGHT_PX = 640, 480
 FRAME_PERIOD_NS = 40_000_000
+
+
+@dataclass(frozen=True)
+class Recordings:
+    """A recordings root, the recording the tests open, and where it came from."""
+
+    root: Path
+    name: str
+    source: str  # "synth", "bundled" or "writer"
 
 
 def fake_camera() -> CameraModel:
@@ -41,14 +51,50 @@ class FakeDrive:
         ramp = np.tile(np.linspace(0, 120, WIDTH_PX, dtype=np.float64), (HEIGHT_PX, 1))
         image = (ramp + 10 * index).astype(np.uint8)
         target = RadarTarget(20.0, 0.0, -1.0, 1.0, x_m=20.0 + index, y_m=0.5)
-        return FrameInput(index, self.times_ns[index], image, (target,), self.times_ns[index],
-                          speed_mps=25.0, yaw_rate_radps=0.01)
+        return FrameInput(
+            index,
+            self.times_ns[index],
+            image,
+            (target,),
+            self.times_ns[index],
+            speed_mps=25.0,
+            yaw_rate_radps=0.01,
+        )
 
     def truth(self, index: int) -> FrameTruth | None:
-        car = TruthObject(7, "car", (280.0, 230.0, 360.0, 290.0), (20.0, 0.5, 0.0),
-                          (4.0, 1.8, 1.5), (0.0, 0.0), True, 0.0)
+        car = TruthObject(
+            7,
+            "car",
+            (280.0, 230.0, 360.0, 290.0),
+            (20.0, 0.5, 0.0),
+            (4.0, 1.8, 1.5),
+            (0.0, 0.0),
+            True,
+            0.0,
+        )
         rail = TruthGuardRail(3, "right", ((400.0, 300.0), (600.0, 420.0)))
         return FrameTruth(index, self.times_ns[index], 0.02, (car,), (rail,))
 
     def close(self) -> None:
         self.closed = True
+
+
+def write_fake_recording(out_dir: Path, frames: int) -> Path:
+    """`FakeDrive(frames)` written as a real recording folder with the project's writer."""
+    from core.io import RecordingWriter
+    from core.io.calibration import Calibration, RadarMount
+
+    fake = FakeDrive(frames=frames, name=out_dir.name)
+    calibration = Calibration(fake.camera, RadarMount(x_m=0.0, y_m=0.0))
+    with RecordingWriter(out_dir, name=out_dir.name, calibration=calibration) as writer:
+        truths = []
+        for i in range(frames):
+            frame = fake.frame(i)
+            writer.add_image(frame.t_ns, np.array(frame.image))
+            writer.add_radar_scan(frame.t_ns, frame.radar)
+            writer.add_vehicle_state(frame.t_ns, frame.speed_mps, frame.yaw_rate_radps)
+            truth = fake.truth(i)
+            assert truth is not None
+            truths.append(truth)
+        writer.set_groundtruth(truths)
+    return out_dir

@@ -16,6 +16,11 @@ def test_readout_gives_frame_time_speed_and_yaw_rate_in_display_units() -> None:
     assert text == "frame 3 / 9 | t 0.12 s | 90.0 km/h | yaw +2.00 deg/s"
 
 
+def test_readout_without_can_says_not_available() -> None:
+    text = readout_text(0, 1, 0.0, float("nan"), float("nan"))
+    assert text == "frame 0 / 0 | t 0.00 s | speed n/a | yaw n/a"
+
+
 def test_view_of_a_frame_carries_that_frames_index_and_time() -> None:
     drive = FakeDrive(frames=10)
     view = render_view(drive, ViewState(frame=2))

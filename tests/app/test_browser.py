@@ -1,0 +1,135 @@
+"""The inspector in headless Chromium: the camera image shows, stepping shows the next frame.
+
+Needs Debian's chromium at /usr/bin/chromium (never `playwright install`). Without it the
+tests skip, except when CI or REQUIRE_BROWSER is set, where they fail.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from app_fakes import Recordings
+from playwright.sync_api import Browser, Page, sync_playwright
+
+from app.server import DriveOpener, InspectorServer, open_drive
+from core.io import Drive
+from core.io.errors import RecordingError
+
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+SCREENSHOT = Path("/tmp/inspector.png")
+TIMEOUT_MS = 30_000
+
+# The camera image: the one <img> viser fills from a blob with the rendered frame.
+CAMERA_IMG = "img[src^='blob:']"
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Browser]:
+    if not CHROMIUM.exists():
+        message = f"headless browser tests need Debian chromium at {CHROMIUM}"
+        if os.environ.get("CI") or os.environ.get("REQUIRE_BROWSER"):
+            pytest.fail(message + " (CI / REQUIRE_BROWSER is set)")
+        pytest.skip(message)
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+        yield browser
+        browser.close()
+
+
+@pytest.fixture()
+def page(browser: Browser) -> Iterator[Page]:
+    context = browser.new_context(viewport={"width": 1400, "height": 800})  # fresh profile
+    yield context.new_page()
+    context.close()
+
+
+def start(
+    root: Path, recording: str | None = None, opener: DriveOpener = open_drive
+) -> InspectorServer:
+    server = InspectorServer(root, recording, "127.0.0.1", 0, open_drive=opener)
+    server.start()
+    return server
+
+
+def camera_src(page: Page) -> str:
+    page.wait_for_function(
+        f'() => {{ const i = document.querySelector("{CAMERA_IMG}");'
+        " return i !== null && i.complete && i.naturalWidth > 0; }",
+        timeout=TIMEOUT_MS,
+    )
+    return page.locator(CAMERA_IMG).get_attribute("src") or ""
+
+
+def test_step_shows_the_next_frame(recordings: Recordings, page: Page) -> None:
+    server = start(recordings.root, recordings.name)
+    try:
+        page.goto(f"http://127.0.0.1:{server.port}/")
+        first = camera_src(page)
+        size = page.locator(CAMERA_IMG).evaluate("i => [i.naturalWidth, i.naturalHeight]")
+        assert size[0] == 640 and size[1] > 480  # the frame plus its caption strip
+        page.get_by_text("frame 0 /").wait_for(timeout=TIMEOUT_MS)
+        page.screenshot(path=str(SCREENSHOT))
+
+        page.get_by_role("button", name="Step +1").click()
+        page.get_by_text("frame 1 /").wait_for(timeout=TIMEOUT_MS)
+        page.wait_for_function(
+            f'src => document.querySelector("{CAMERA_IMG}")?.src !== src',
+            arg=first,
+            timeout=TIMEOUT_MS,
+        )
+        assert camera_src(page) != first
+    finally:
+        server.stop()
+
+
+def test_play_runs_to_the_end_and_pause_stops(recordings: Recordings, page: Page) -> None:
+    with Drive(recordings.root / recordings.name) as drive:
+        last = len(drive) - 1
+    server = start(recordings.root, recordings.name)
+    try:
+        page.goto(f"http://127.0.0.1:{server.port}/")
+        camera_src(page)
+        readout = page.get_by_text(re.compile(r"^frame \d+ / \d+ \|"))
+        page.get_by_role("button", name="Play").click()
+        page.get_by_text(f"frame {last} / {last}").wait_for(timeout=TIMEOUT_MS)
+        page.get_by_role("button", name="Play").wait_for(timeout=TIMEOUT_MS)
+
+        page.get_by_role("button", name="Play").click()  # from the end: starts over
+        page.get_by_role("button", name="Pause").click()
+        page.get_by_role("button", name="Play").wait_for(timeout=TIMEOUT_MS)
+        paused_at = readout.inner_text()
+        page.wait_for_timeout(500)
+        assert readout.inner_text() == paused_at
+        assert not paused_at.startswith(f"frame {last} /")
+    finally:
+        server.stop()
+
+
+def test_recording_that_cannot_open_shows_a_message(tmp_path: Path, page: Page) -> None:
+    (tmp_path / "broken").mkdir()
+    (tmp_path / "broken" / "recording.yaml").write_text("this: [is not a manifest\n")
+    with pytest.raises(RecordingError) as err:
+        Drive(tmp_path / "broken")
+    server = start(tmp_path)
+    try:
+        page.goto(f"http://127.0.0.1:{server.port}/")
+        page.get_by_text("Cannot show this recording").wait_for(timeout=TIMEOUT_MS)
+        page.get_by_text(str(err.value).splitlines()[0][-30:]).wait_for(timeout=TIMEOUT_MS)
+        assert page.locator(CAMERA_IMG).count() == 0
+        assert page.get_by_text("Traceback").count() == 0
+    finally:
+        server.stop()
