@@ -17,6 +17,12 @@ from app.view import FrameView
 
 CAMERA_PANEL_WIDTH_PX = 680
 WAITING_TEXT = "rendering…"
+MARKDOWN_SPECIALS = "\\`*_{}[]<>()#+-.!|~"
+
+
+def _escape_markdown(text: str) -> str:
+    """`text` shown literally by the markdown widget (file paths, reader messages)."""
+    return "".join("\\" + c if c in MARKDOWN_SPECIALS else c for c in text)
 
 
 class ClientSession:
@@ -80,8 +86,12 @@ class ClientSession:
     def show_error(self, headline: str, detail: str = "") -> None:
         """Replace the drive controls with a message saying what is wrong."""
         self._drop_drive()
-        block = f"\n\n```text\n{detail}\n```" if detail else ""
-        self._message.content = f"**{headline}**{block}"
+        self._camera_panel.visible = False
+        first, _, rest = detail.partition("\n")
+        text = f"**{_escape_markdown(headline)}**\n\n{_escape_markdown(first)}"
+        if rest.strip():
+            text += f"\n\n```text\n{rest}\n```"
+        self._message.content = text
 
     def show_drive(
         self,
@@ -99,7 +109,10 @@ class ClientSession:
             self._frame_rate_hz = frame_rate_hz
             self._request = request
             self._state = replace(self._state, frame=0, playing=False)
-        self._message.content = f"**{name}** — {frame_count} frames at {frame_rate_hz:.1f} Hz"
+        self._camera_panel.visible = True
+        self._message.content = (
+            f"**{_escape_markdown(name)}** — {frame_count} frames at {frame_rate_hz:.1f} Hz"
+        )
         if frame_count == 0:
             return
         with gui.add_folder("Timeline", order=2) as self._timeline:
@@ -137,7 +150,7 @@ class ClientSession:
                 return
             self._state = replace(self._state, frame=frame)
         if self._slider is not None:
-            self._slider.value = frame
+            self._slider.value = frame  # type: ignore[misc]  # mypy: asymmetric viser property
         self._submit()
 
     def step(self, delta: int) -> None:

@@ -31,6 +31,7 @@ CHROMIUM_ARGS = [
     "--disable-sync",
 ]
 SCREENSHOT = Path("/tmp/inspector.png")
+ERROR_SCREENSHOT = Path("/tmp/inspector-error.png")
 TIMEOUT_MS = 30_000
 
 # The camera image: the one <img> viser fills from a blob with the rendered frame.
@@ -131,5 +132,6 @@ def test_recording_that_cannot_open_shows_a_message(tmp_path: Path, page: Page) 
         page.get_by_text(str(err.value).splitlines()[0][-30:]).wait_for(timeout=TIMEOUT_MS)
         assert page.locator(CAMERA_IMG).count() == 0
         assert page.get_by_text("Traceback").count() == 0
+        page.screenshot(path=str(ERROR_SCREENSHOT))
     finally:
         server.stop()
