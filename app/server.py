@@ -42,7 +42,7 @@ def open_drive(path: Path) -> FrameSource:
 @dataclass
 class _OpenDrive:
     drive: FrameSource
-    worker: RenderWorker[int, ViewState, FrameView]
+    worker: RenderWorker[int, ViewState, FrameView | RecordingError]
 
 
 class InspectorServer:
@@ -156,12 +156,19 @@ class InspectorServer:
                 return self._drives[name]
             drive = self._open_drive(resolve_recording(self.recordings_root, name))
 
-            def render(state: ViewState) -> FrameView:
-                return render_view(drive, state)
+            def render(state: ViewState) -> FrameView | RecordingError:
+                try:
+                    return render_view(drive, state)
+                except RecordingError as err:  # a damaged frame: say so on the page
+                    return err
 
-            def publish(client_id: int, _: ViewState, view: FrameView) -> None:
+            def publish(client_id: int, state: ViewState, view: FrameView | RecordingError) -> None:
                 session = self._sessions.get(client_id)
-                if session is not None:
+                if session is None:
+                    return
+                if isinstance(view, RecordingError):
+                    session.show_frame_error(name, state.frame, str(view))
+                else:
                     session.show_view(name, view)
 
             entry = _OpenDrive(drive, RenderWorker(render, publish, name=f"render-{name}"))

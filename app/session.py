@@ -139,6 +139,12 @@ class ClientSession:
                 self._image.image = view.image
             self._readout.content = f"`{view.readout}`"
 
+    def show_frame_error(self, recording: str, frame: int, message: str) -> None:
+        """Say in the read-out that `frame` could not be read (the image keeps the last frame)."""
+        if recording != self.recording or self._readout is None:
+            return
+        self._readout.content = f"**frame {frame} cannot be read:** {_escape_markdown(message)}"
+
     # --- controls -> state ----------------------------------------------------------------
     def go_to(self, frame: int) -> None:
         """Show `frame` (clamped to the drive)."""

@@ -12,11 +12,11 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from app_fakes import Recordings
+from app_fakes import FakeDrive, Recordings
 from playwright.sync_api import Browser, Page, sync_playwright
 
 from app.server import DriveOpener, InspectorServer, open_drive
-from core.io import Drive
+from core.io import Drive, FrameInput
 from core.io.errors import RecordingError
 
 CHROMIUM = Path("/usr/bin/chromium")
@@ -133,5 +133,27 @@ def test_recording_that_cannot_open_shows_a_message(tmp_path: Path, page: Page) 
         assert page.locator(CAMERA_IMG).count() == 0
         assert page.get_by_text("Traceback").count() == 0
         page.screenshot(path=str(ERROR_SCREENSHOT))
+    finally:
+        server.stop()
+
+
+def test_frame_that_cannot_be_read_is_reported_in_the_readout(tmp_path: Path, page: Page) -> None:
+    class DamagedDrive(FakeDrive):
+        def frame(self, index: int) -> FrameInput:
+            if index == 1:
+                raise RecordingError("bag: frame 1 image is not a PNG")
+            return super().frame(index)
+
+    (tmp_path / "damaged").mkdir()
+    (tmp_path / "damaged" / "recording.yaml").write_text("{}\n")
+    server = start(tmp_path, None, lambda path: DamagedDrive(frames=5, name=path.name))
+    try:
+        page.goto(f"http://127.0.0.1:{server.port}/")
+        camera_src(page)
+        page.get_by_role("button", name="Step +1").click()
+        page.get_by_text("frame 1 cannot be read").wait_for(timeout=TIMEOUT_MS)
+        page.get_by_text("image is not a PNG").wait_for(timeout=TIMEOUT_MS)
+        page.get_by_role("button", name="Step +1").click()
+        page.get_by_text("frame 2 /").wait_for(timeout=TIMEOUT_MS)
     finally:
         server.stop()
