@@ -10,8 +10,9 @@ Layout (format_version 1):
                               "occlusion": 0.0}],
                  "guard_rails": [{"id": 7, "side": "right", "polyline_px": [[u, v], ...]}]}]}
 
-box_px is the visible part, (u0, v0) top-left and (u1, v1) bottom-right in pixels, exclusive
-of nothing (continuous pixel coordinates); position_m is the centre of the object's base
+box_px is the visible part: (u0, v0) the top-left and (u1, v1) the bottom-right edge of its
+pixels in continuous image coordinates (pixel centres at integers, so a box covering columns
+10..19 runs from u0 = 9.5 to u1 = 19.5); position_m is the centre of the object's base
 (nearest face centre for vehicles seen from behind or front) in the vehicle frame at t_ns;
 velocity_mps is over ground in the vehicle frame axes; occlusion is the hidden fraction of
 the object's full image box.

@@ -643,12 +643,12 @@ class Renderer:
             if n_vis < MIN_VISIBLE_PX:
                 continue
             rows, cols = np.nonzero(labels == obj_id)
-            box = (float(cols.min()), float(rows.min()), float(cols.max() + 1), float(rows.max() + 1))
+            box = (cols.min() - 0.5, rows.min() - 0.5, cols.max() + 0.5, rows.max() + 0.5)  # pixel edges
             objects.append(
                 TruthObject(
                     id=obj_id,
                     cls=cls,
-                    box_px=box,
+                    box_px=tuple(float(c) for c in box),  # type: ignore[arg-type]
                     position_m=(float(near_c[0]), float(near_c[1]), 0.0),
                     size_m=(float(size[0]), float(size[1]), float(size[2])),
                     velocity_mps=(float(vel[0]), float(vel[1])),
