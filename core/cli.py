@@ -31,7 +31,13 @@ def _cmd_synth(args: argparse.Namespace) -> int:
     from core.synth.generate import generate
 
     try:
-        out = generate(args.scenario, args.seconds, args.seed, args.out_dir, progress=ProgressBar(f"synth {args.scenario}"))
+        out = generate(
+            args.scenario,
+            args.seconds,
+            args.seed,
+            args.out_dir,
+            progress=ProgressBar(f"synth {args.scenario}"),
+        )
     except (ValueError, RecordingError) as err:
         print(f"fusionscope synth: {err}", file=sys.stderr)
         return 2
@@ -44,7 +50,11 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 
     root = Path(args.recordings)
     if not root.is_dir():
-        print(f"fusionscope serve: --recordings {root}: expected a folder of recordings, it does not exist", file=sys.stderr)
+        print(
+            f"fusionscope serve: --recordings {root}: expected a folder of recordings, "
+            "it does not exist",
+            file=sys.stderr,
+        )
         return 2
     serve(root, args.recording, args.host, args.port)
     return 0
@@ -53,12 +63,22 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     from core.synth.scenarios import SCENARIOS
 
-    parser = argparse.ArgumentParser(prog="fusionscope", description="Radar-vision fusion on recorded drives.")
+    parser = argparse.ArgumentParser(
+        prog="fusionscope", description="Radar-vision fusion on recorded drives."
+    )
     sub = parser.add_subparsers(dest="command", required=True)
 
     serve = sub.add_parser("serve", help="start the web inspector")
-    serve.add_argument("--recordings", default=str(DEFAULT_RECORDINGS), help="folder of recordings to serve (default: the bundled ones)")
-    serve.add_argument("--recording", default=DEFAULT_RECORDING, help=f"recording opened first (default: {DEFAULT_RECORDING})")
+    serve.add_argument(
+        "--recordings",
+        default=str(DEFAULT_RECORDINGS),
+        help="folder of recordings to serve (default: the bundled ones)",
+    )
+    serve.add_argument(
+        "--recording",
+        default=DEFAULT_RECORDING,
+        help=f"recording opened first (default: {DEFAULT_RECORDING})",
+    )
     serve.add_argument("--host", default="127.0.0.1", help="address to bind (default: 127.0.0.1)")
     serve.add_argument("--port", type=int, default=8080, help="port (default: 8080)")
     serve.set_defaults(func=_cmd_serve)
@@ -66,7 +86,9 @@ def build_parser() -> argparse.ArgumentParser:
     synth = sub.add_parser("synth", help="generate a synthetic drive with exact ground truth")
     synth.add_argument("--scenario", required=True, choices=sorted(SCENARIOS))
     synth.add_argument("--seconds", type=float, default=20.0, help="duration (default: 20)")
-    synth.add_argument("--seed", type=int, default=0, help="random seed; one seed, the same bytes (default: 0)")
+    synth.add_argument(
+        "--seed", type=int, default=0, help="random seed; one seed, the same bytes (default: 0)"
+    )
     synth.add_argument("out_dir", help="new or empty folder to write the recording into")
     synth.set_defaults(func=_cmd_synth)
     return parser

@@ -51,7 +51,12 @@ CAMERA_FRAME_ID = "camera"
 RADAR_FRAME_ID = "radar"
 PNG_FORMAT = "mono8; png compressed mono8"
 # Huffman-only coding: sensor noise defeats LZ matching, so this is smaller and faster
-PNG_PARAMS = [cv2.IMWRITE_PNG_COMPRESSION, 9, cv2.IMWRITE_PNG_STRATEGY, cv2.IMWRITE_PNG_STRATEGY_HUFFMAN_ONLY]
+PNG_PARAMS = [
+    cv2.IMWRITE_PNG_COMPRESSION,
+    9,
+    cv2.IMWRITE_PNG_STRATEGY,
+    cv2.IMWRITE_PNG_STRATEGY_HUFFMAN_ONLY,
+]
 BAG_DIR = "bag"
 CAN_LOG = "vehicle.blf"
 DBC_NAME = "vehicle.dbc"

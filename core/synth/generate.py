@@ -40,7 +40,9 @@ Progress = Callable[[int, int], None]
 def synthetic_calibration() -> Calibration:
     intrinsics = Intrinsics.from_fov(*IMAGE_SIZE_PX, HORIZONTAL_FOV_RAD)
     extrinsics = Extrinsics(height_m=CAMERA_HEIGHT_M, x_m=CAMERA_X_M, pitch_rad=CAMERA_PITCH_RAD)
-    return Calibration(camera=CameraModel(intrinsics, extrinsics, ROWS_USED_PX), radar_mount=RADAR_MOUNT)
+    return Calibration(
+        camera=CameraModel(intrinsics, extrinsics, ROWS_USED_PX), radar_mount=RADAR_MOUNT
+    )
 
 
 def generate(
@@ -57,11 +59,13 @@ def generate(
         raise ValueError(f"seconds: expected a duration in (0, {MAX_SECONDS:g}], got {seconds}")
     if seed < 0:
         raise ValueError(f"seed: expected an integer >= 0, got {seed}")
-    scene_rng, texture_rng, pitch_rng, radar_rng, can_rng, noise_rng = np.random.default_rng(seed).spawn(6)
+    scene_rng, texture_rng, pitch_rng, radar_rng, can_rng, noise_rng = np.random.default_rng(
+        seed
+    ).spawn(6)
     scene = SCENARIOS[scenario](seconds, scene_rng)
     calibration = synthetic_calibration()
     renderer = Renderer(scene, calibration.camera, texture_rng)
-    n_frames = max(int(round(seconds * FRAME_RATE_HZ)), 1)
+    n_frames = max(round(seconds * FRAME_RATE_HZ), 1)
     t_s = np.arange(n_frames) / FRAME_RATE_HZ
     pitch = pitch_profile(scene, CAMERA_PITCH_RAD, t_s, pitch_rng)
     can_states = vehicle_states(scene, can_rng)
@@ -69,7 +73,9 @@ def generate(
     out = Path(out_dir)
     generator = {"scenario": scenario, "seconds": float(seconds), "seed": int(seed)}
     description = (SCENARIOS[scenario].__doc__ or scenario).strip()
-    with RecordingWriter(out, name=out.name, calibration=calibration, description=description, generator=generator) as writer:
+    with RecordingWriter(
+        out, name=out.name, calibration=calibration, description=description, generator=generator
+    ) as writer:
         for k, t in enumerate(t_s):
             t = float(t)
             t_ns = START_NS + round(t * 1e9)
@@ -77,7 +83,9 @@ def generate(
             writer.add_image(t_ns, camera_noise(frame.image, noise_rng))
             speed = scene.ego_speed_mps(t)
             yaw_rate = scene.ego_yaw_rate_radps(t)
-            targets, seen = radar_scan(scene, views, rail_points, speed, yaw_rate, calibration.radar_mount, radar_rng)
+            targets, seen = radar_scan(
+                scene, views, rail_points, speed, yaw_rate, calibration.radar_mount, radar_rng
+            )
             writer.add_radar_scan(t_ns, targets)
             objects = tuple(
                 o if o.id not in seen else replace(o, radar_seen=True) for o in frame.objects
@@ -89,4 +97,3 @@ def generate(
             writer.add_vehicle_state(START_NS + round(t * 1e9), speed, yaw_rate)
         writer.set_groundtruth(truths)
     return out
-

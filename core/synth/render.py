@@ -107,17 +107,27 @@ class _Drawable:
 # --- the road texture ----------------------------------------------------------------------
 
 
-def _smooth_noise(rng: np.random.Generator, shape: tuple[int, int], cell: tuple[int, int]) -> npt.NDArray[np.float32]:
+def _smooth_noise(
+    rng: np.random.Generator, shape: tuple[int, int], cell: tuple[int, int]
+) -> npt.NDArray[np.float32]:
     """Zero-mean, unit-ish noise with blobs about `cell` texture cells big."""
-    coarse = rng.standard_normal((shape[0] // cell[0] + 2, shape[1] // cell[1] + 2)).astype(np.float32)
-    big = cv2.resize(coarse, (coarse.shape[1] * cell[1], coarse.shape[0] * cell[0]), interpolation=cv2.INTER_CUBIC)
-    return big[: shape[0], : shape[1]]
+    coarse = rng.standard_normal((shape[0] // cell[0] + 2, shape[1] // cell[1] + 2)).astype(
+        np.float32
+    )
+    big = cv2.resize(
+        coarse,
+        (coarse.shape[1] * cell[1], coarse.shape[0] * cell[0]),
+        interpolation=cv2.INTER_CUBIC,
+    )
+    return np.asarray(big[: shape[0], : shape[1]], dtype=np.float32)
 
 
 class RoadTexture:
     """Ground brightness tabulated over road coordinates, in pre-filtered levels."""
 
-    def __init__(self, scene: Scene, s_range_m: tuple[float, float], rng: np.random.Generator) -> None:
+    def __init__(
+        self, scene: Scene, s_range_m: tuple[float, float], rng: np.random.Generator
+    ) -> None:
         self.s0_m = s_range_m[0]
         self.d0_m = TEXTURE_D_RANGE_M[0]
         rows = int((s_range_m[1] - s_range_m[0]) / TEXTURE_S_M)
@@ -144,10 +154,14 @@ class RoadTexture:
             else:
                 mask = np.broadcast_to(on_d[None, :], tex.shape)
             tex = np.where(mask, MARKING_GREY * wear, tex)
-        road_d = [surf for surf in scene.surfaces if surf.d0_m <= 0.0 < surf.d1_m][0]
+        road_d = next(surf for surf in scene.surfaces if surf.d0_m <= 0.0 < surf.d1_m)
         for sz in scene.crosswalks_s_m:
             on_s = (s >= sz) & (s < sz + ZEBRA_DEPTH_M)
-            on_d = (np.mod(d, 2 * ZEBRA_BAR_M) < ZEBRA_BAR_M) & (d > road_d.d0_m) & (d < road_d.d1_m + 2.2)
+            on_d = (
+                (np.mod(d, 2 * ZEBRA_BAR_M) < ZEBRA_BAR_M)
+                & (d > road_d.d0_m)
+                & (d < road_d.d1_m + 2.2)
+            )
             tex = np.where(on_s[:, None] & on_d[None, :], MARKING_GREY * wear, tex)
         # World-fixed patches: tree and bridge shadows, repairs.
         for p in scene.patches:
@@ -158,9 +172,13 @@ class RoadTexture:
             ss = s[r0:r1, None]
             if p.round_shape:
                 wobble = 1.0 + 0.25 * mid[r0:r1, :]
-                inside = ((ss - p.s_m) / (p.length_m / 2)) ** 2 + ((d[None, :] - p.d_m) / (p.width_m / 2)) ** 2 < wobble
+                inside = ((ss - p.s_m) / (p.length_m / 2)) ** 2 + (
+                    (d[None, :] - p.d_m) / (p.width_m / 2)
+                ) ** 2 < wobble
             else:
-                inside = np.broadcast_to(np.abs(d[None, :] - p.d_m) < p.width_m / 2, (r1 - r0, cols))
+                inside = np.broadcast_to(
+                    np.abs(d[None, :] - p.d_m) < p.width_m / 2, (r1 - r0, cols)
+                )
             soft = cv2.GaussianBlur(inside.astype(np.float32), (0, 0), 3.0)
             tex[r0:r1] *= 1.0 - (1.0 - p.factor) * soft
         self.levels = [np.clip(tex, 0, 255).astype(np.float32)]
@@ -168,11 +186,19 @@ class RoadTexture:
             prev = self.levels[-1]
             if prev.shape[0] < 4:
                 break
-            self.levels.append(cv2.resize(prev, (cols, prev.shape[0] // 2), interpolation=cv2.INTER_AREA))
+            self.levels.append(
+                cv2.resize(prev, (cols, prev.shape[0] // 2), interpolation=cv2.INTER_AREA)
+            )
 
-    def sample(self, s_m: FloatArray, d_m: FloatArray, footprint_m: FloatArray) -> npt.NDArray[np.float32]:
+    def sample(
+        self, s_m: FloatArray, d_m: FloatArray, footprint_m: FloatArray
+    ) -> npt.NDArray[np.float32]:
         """Brightness at road points, filtered to the given footprint along s (all (N,))."""
-        level = np.clip(np.floor(np.log2(np.maximum(footprint_m, TEXTURE_S_M) / TEXTURE_S_M)), 0, len(self.levels) - 1).astype(int)
+        level = np.clip(
+            np.floor(np.log2(np.maximum(footprint_m, TEXTURE_S_M) / TEXTURE_S_M)),
+            0,
+            len(self.levels) - 1,
+        ).astype(int)
         out = np.empty(len(s_m), dtype=np.float32)
         col = ((d_m - self.d0_m) / TEXTURE_D_M - 0.5).astype(np.float32)
         for k in np.unique(level):
@@ -182,7 +208,9 @@ class RoadTexture:
         return out
 
 
-def _gather(img: npt.NDArray[np.float32], col: npt.NDArray[np.float32], row: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
+def _gather(
+    img: npt.NDArray[np.float32], col: npt.NDArray[np.float32], row: npt.NDArray[np.float32]
+) -> npt.NDArray[np.float32]:
     """Bilinear samples of img at (col, row) (N,) with edge clamping, via cv2.remap."""
     n = len(col)
     width = 1024
@@ -190,8 +218,14 @@ def _gather(img: npt.NDArray[np.float32], col: npt.NDArray[np.float32], row: npt
     mx = np.zeros(h * width, dtype=np.float32)
     my = np.zeros(h * width, dtype=np.float32)
     mx[:n], my[:n] = col, row
-    res = cv2.remap(img, mx.reshape(h, width), my.reshape(h, width), cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    return res.ravel()[:n]
+    res = cv2.remap(
+        img,
+        mx.reshape(h, width),
+        my.reshape(h, width),
+        cv2.INTER_LINEAR,
+        borderMode=cv2.BORDER_REPLICATE,
+    )
+    return np.asarray(res, dtype=np.float32).ravel()[:n]
 
 
 # --- geometry helpers ----------------------------------------------------------------------
@@ -228,7 +262,9 @@ class _Projector:
         return np.round(uv * (1 << SUBPIXEL_SHIFT)).astype(np.int32)
 
 
-def _face_points(center: FloatArray, right: FloatArray, pts_az: Iterable[tuple[float, float]]) -> Polygon:
+def _face_points(
+    center: FloatArray, right: FloatArray, pts_az: Iterable[tuple[float, float]]
+) -> Polygon:
     """Points (a along `right`, z up) on a vertical face through `center` (x, y, 0)."""
     return np.array([[center[0] + a * right[0], center[1] + a * right[1], z] for a, z in pts_az])
 
@@ -238,10 +274,15 @@ def _rect(a0: float, a1: float, z0: float, z1: float) -> list[tuple[float, float
 
 
 def _ellipse(ac: float, zc: float, ra: float, rz: float, n: int = 14) -> list[tuple[float, float]]:
-    return [(ac + ra * math.cos(2 * math.pi * k / n), zc + rz * math.sin(2 * math.pi * k / n)) for k in range(n)]
+    return [
+        (ac + ra * math.cos(2 * math.pi * k / n), zc + rz * math.sin(2 * math.pi * k / n))
+        for k in range(n)
+    ]
 
 
-def _mirror(parts: list[tuple[list[tuple[float, float]], float]]) -> list[tuple[list[tuple[float, float]], float]]:
+def _mirror(
+    parts: list[tuple[list[tuple[float, float]], float]],
+) -> list[tuple[list[tuple[float, float]], float]]:
     """Each part and its mirror image about a = 0 (vehicles and people are symmetric)."""
     out = []
     for pts, grey in parts:
@@ -267,11 +308,16 @@ def _rear_design(v: Vehicle) -> list[tuple[list[tuple[float, float]], float]]:
             (_rect(-hw, hw, 0.45, 0.58), 35.0),  # underride bar
             (_rect(-1.2, 1.2, deck - 0.12, deck), 45.0),
         ]
-        parts += _mirror([
-            (_rect(hw - 0.6, hw - 0.05, 0.0, 0.95), tyre),
-            (_rect(hw * 0.45 - 0.03, hw * 0.45 + 0.03, deck + 0.1, H - 0.1), 0.55 * g),  # lock bars
-            (_rect(hw - 0.3, hw - 0.05, 0.8, 1.0), light),
-        ])
+        parts += _mirror(
+            [
+                (_rect(hw - 0.6, hw - 0.05, 0.0, 0.95), tyre),
+                (
+                    _rect(hw * 0.45 - 0.03, hw * 0.45 + 0.03, deck + 0.1, H - 0.1),
+                    0.55 * g,
+                ),  # lock bars
+                (_rect(hw - 0.3, hw - 0.05, 0.8, 1.0), light),
+            ]
+        )
         return parts
     roof = H
     shoulder = 0.62 * H if v.cls == "car" else 0.5 * H
@@ -281,14 +327,24 @@ def _rear_design(v: Vehicle) -> list[tuple[list[tuple[float, float]], float]]:
         ([(-hw, shoulder), (hw, shoulder), (hw * 0.86, roof), (-hw * 0.86, roof)], g),
         (_rect(-hw, hw, 0.28, 0.48), 0.55 * g + 10),  # bumper
         (_rect(-0.26, 0.26, 0.5, 0.62), 215.0),  # licence plate
-        ([(-hw * 0.8, shoulder + 0.05), (hw * 0.8, shoulder + 0.05), (hw * 0.72, roof - 0.08), (-hw * 0.72, roof - 0.08)], 38.0),
+        (
+            [
+                (-hw * 0.8, shoulder + 0.05),
+                (hw * 0.8, shoulder + 0.05),
+                (hw * 0.72, roof - 0.08),
+                (-hw * 0.72, roof - 0.08),
+            ],
+            38.0,
+        ),
     ]
     if v.cls == "van":
         parts.append((_rect(-0.025, 0.025, 0.5, roof - 0.05), 0.5 * g))
-    parts += _mirror([
-        (_rect(hw - 0.27, hw - 0.03, 0.0, 0.33), tyre),
-        (_rect(hw - 0.32, hw - 0.04, shoulder - 0.2, shoulder - 0.04), light),
-    ])
+    parts += _mirror(
+        [
+            (_rect(hw - 0.27, hw - 0.03, 0.0, 0.33), tyre),
+            (_rect(hw - 0.32, hw - 0.04, shoulder - 0.2, shoulder - 0.04), light),
+        ]
+    )
     return parts
 
 
@@ -304,7 +360,12 @@ def _front_design(v: Vehicle) -> list[tuple[list[tuple[float, float]], float]]:
             (_rect(-hw + 0.15, hw - 0.15, 1.9, cab), 70.0),  # windscreen
             (_rect(-0.7, 0.7, 0.7, 1.7), 45.0),  # grille
         ]
-        parts += _mirror([(_rect(hw - 0.5, hw - 0.05, 0.0, 0.9), tyre), (_rect(hw - 0.45, hw - 0.1, 0.65, 0.85), 220.0)])
+        parts += _mirror(
+            [
+                (_rect(hw - 0.5, hw - 0.05, 0.0, 0.9), tyre),
+                (_rect(hw - 0.45, hw - 0.1, 0.65, 0.85), 220.0),
+            ]
+        )
         return parts
     shoulder = 0.55 * H
     parts = [
@@ -312,9 +373,22 @@ def _front_design(v: Vehicle) -> list[tuple[list[tuple[float, float]], float]]:
         (_rect(-hw, hw, 0.28, shoulder), g),
         ([(-hw, shoulder), (hw, shoulder), (hw * 0.84, H), (-hw * 0.84, H)], g),
         (_rect(-hw * 0.45, hw * 0.45, 0.32, 0.5), 40.0),  # grille
-        ([(-hw * 0.82, shoulder + 0.04), (hw * 0.82, shoulder + 0.04), (hw * 0.7, H - 0.07), (-hw * 0.7, H - 0.07)], 75.0),
+        (
+            [
+                (-hw * 0.82, shoulder + 0.04),
+                (hw * 0.82, shoulder + 0.04),
+                (hw * 0.7, H - 0.07),
+                (-hw * 0.7, H - 0.07),
+            ],
+            75.0,
+        ),
     ]
-    parts += _mirror([(_rect(hw - 0.26, hw - 0.03, 0.0, 0.33), tyre), (_rect(hw - 0.38, hw - 0.08, 0.52, 0.66), 215.0)])
+    parts += _mirror(
+        [
+            (_rect(hw - 0.26, hw - 0.03, 0.0, 0.33), tyre),
+            (_rect(hw - 0.38, hw - 0.08, 0.52, 0.66), 215.0),
+        ]
+    )
     return parts
 
 
@@ -322,7 +396,11 @@ def _side_design(v: Vehicle) -> list[tuple[list[tuple[float, float]], float]]:
     L, H, g = v.length_m, v.height_m, 0.82 * float(v.body_grey)
     hl = L / 2
     if v.cls == "truck":
-        parts = [(_rect(-hl, hl - 2.3, 1.05, H), min(g + 20, 230)), (_rect(hl - 2.2, hl, 0.5, 3.0), g), (_rect(hl - 1.4, hl - 0.1, 1.9, 2.8), 70.0)]
+        parts = [
+            (_rect(-hl, hl - 2.3, 1.05, H), min(g + 20, 230)),
+            (_rect(hl - 2.2, hl, 0.5, 3.0), g),
+            (_rect(hl - 1.4, hl - 0.1, 1.9, 2.8), 70.0),
+        ]
         wheels = [hl - 1.2, -hl + 1.2, -hl + 2.5]
         radius = 0.5
     else:
@@ -330,7 +408,15 @@ def _side_design(v: Vehicle) -> list[tuple[list[tuple[float, float]], float]]:
         parts = [
             (_rect(-hl, hl, 0.28, shoulder), g),
             ([(-hl + 0.5, shoulder), (hl - 0.9, shoulder), (hl - 1.6, H), (-hl + 0.7, H)], g),
-            ([(-hl + 0.65, shoulder + 0.04), (hl - 1.0, shoulder + 0.04), (hl - 1.65, H - 0.07), (-hl + 0.8, H - 0.07)], 45.0),
+            (
+                [
+                    (-hl + 0.65, shoulder + 0.04),
+                    (hl - 1.0, shoulder + 0.04),
+                    (hl - 1.65, H - 0.07),
+                    (-hl + 0.8, H - 0.07),
+                ],
+                45.0,
+            ),
         ]
         wheels = [hl - 0.85, -hl + 0.85]
         radius = 0.32
@@ -338,7 +424,9 @@ def _side_design(v: Vehicle) -> list[tuple[list[tuple[float, float]], float]]:
     return parts
 
 
-def _pedestrian_design(p: Pedestrian, phase: float) -> list[tuple[list[tuple[float, float]], float]]:
+def _pedestrian_design(
+    p: Pedestrian, phase: float
+) -> list[tuple[list[tuple[float, float]], float]]:
     H = p.height_m
     hip, shoulder = 0.52 * H, 0.81 * H
     swing = 0.2 * math.sin(phase) * (H / 1.75)
@@ -346,11 +434,33 @@ def _pedestrian_design(p: Pedestrian, phase: float) -> list[tuple[list[tuple[flo
     parts = []
     for side, sw in ((-1, swing), (1, -swing)):
         a_hip = side * 0.085 * H / 1.75
-        parts.append(([(a_hip - 0.065, hip), (a_hip + 0.065, hip), (a_hip + sw + 0.055, 0.0), (a_hip + sw - 0.055, 0.0)], trousers))
+        parts.append(
+            (
+                [
+                    (a_hip - 0.065, hip),
+                    (a_hip + 0.065, hip),
+                    (a_hip + sw + 0.055, 0.0),
+                    (a_hip + sw - 0.055, 0.0),
+                ],
+                trousers,
+            )
+        )
         a_sh = side * 0.2 * H / 1.75
-        parts.append(([(a_sh - 0.04, shoulder), (a_sh + 0.04, shoulder), (a_sh - 0.6 * sw + side * 0.03 + 0.035, 0.45 * H), (a_sh - 0.6 * sw + side * 0.03 - 0.035, 0.45 * H)], shirt * 0.9))
+        parts.append(
+            (
+                [
+                    (a_sh - 0.04, shoulder),
+                    (a_sh + 0.04, shoulder),
+                    (a_sh - 0.6 * sw + side * 0.03 + 0.035, 0.45 * H),
+                    (a_sh - 0.6 * sw + side * 0.03 - 0.035, 0.45 * H),
+                ],
+                shirt * 0.9,
+            )
+        )
     w_sh, w_hip = 0.19 * H / 1.75, 0.155 * H / 1.75
-    parts.append(([(-w_hip, hip - 0.03), (w_hip, hip - 0.03), (w_sh, shoulder), (-w_sh, shoulder)], shirt))
+    parts.append(
+        ([(-w_hip, hip - 0.03), (w_hip, hip - 0.03), (w_sh, shoulder), (-w_sh, shoulder)], shirt)
+    )
     parts.append((_rect(-0.05, 0.05, shoulder - 0.01, 0.87 * H), 120.0))
     parts.append((_ellipse(0.0, 0.935 * H, 0.095 * H / 1.75, 0.12 * H / 1.75), 110.0))
     parts.append((_ellipse(0.0, 0.97 * H, 0.09 * H / 1.75, 0.06 * H / 1.75), 40.0))  # hair
@@ -362,7 +472,10 @@ def _static_design(o: StaticObject) -> list[tuple[list[tuple[float, float]], flo
     if o.cls == "pole":
         return [(_rect(-hw, hw, 0.0, H), g), (_rect(-hw, hw + 1.2, H - 0.15, H), g * 0.8)]
     if o.cls == "tree":
-        return [(_rect(-hw, hw, 0.0, 0.55 * H), g), (_ellipse(0.0, 0.75 * H, 0.3 * H, 0.3 * H, 18), g * 0.85)]
+        return [
+            (_rect(-hw, hw, 0.0, 0.55 * H), g),
+            (_ellipse(0.0, 0.75 * H, 0.3 * H, 0.3 * H, 18), g * 0.85),
+        ]
     plate_h = min(1.4, 0.45 * H)
     if o.width_m > 1.0:  # a large sign on two posts
         return [
@@ -371,7 +484,11 @@ def _static_design(o: StaticObject) -> list[tuple[list[tuple[float, float]], flo
             (_rect(-hw, hw, H - plate_h, H), 60.0),
             (_rect(-hw + 0.06, hw - 0.06, H - plate_h + 0.06, H - 0.06), g),
         ]
-    return [(_rect(-0.035, 0.035, 0.0, H - 2 * hw), 120.0), (_ellipse(0.0, H - hw, hw, hw, 16), 50.0), (_ellipse(0.0, H - hw, hw * 0.82, hw * 0.82, 16), g)]
+    return [
+        (_rect(-0.035, 0.035, 0.0, H - 2 * hw), 120.0),
+        (_ellipse(0.0, H - hw, hw, hw, 16), 50.0),
+        (_ellipse(0.0, H - hw, hw * 0.82, hw * 0.82, 16), g),
+    ]
 
 
 # --- the renderer --------------------------------------------------------------------------
@@ -388,8 +505,12 @@ class Renderer:
         self.texture = RoadTexture(scene, (s_lo, s_hi), rng)
         i = camera.intrinsics
         self.shape = (i.height_px, i.width_px)
-        u, v = np.meshgrid(np.arange(i.width_px, dtype=np.float64), np.arange(i.height_px, dtype=np.float64))
-        self.rays_cam = np.stack([(u - i.cx_px) / i.fx_px, (v - i.cy_px) / i.fy_px, np.ones_like(u)], axis=-1).reshape(-1, 3)
+        u, v = np.meshgrid(
+            np.arange(i.width_px, dtype=np.float64), np.arange(i.height_px, dtype=np.float64)
+        )
+        self.rays_cam = np.stack(
+            [(u - i.cx_px) / i.fx_px, (v - i.cy_px) / i.fy_px, np.ones_like(u)], axis=-1
+        ).reshape(-1, 3)
         hills = rng.standard_normal(64)
         self._hill_coeffs = hills / np.arange(1, 65) ** 1.2
 
@@ -399,7 +520,9 @@ class Renderer:
         wave = np.sin(np.outer(azimuth_rad, k) * 2 + k) @ self._hill_coeffs
         return np.radians(1.6 + 1.2 * wave)
 
-    def _background(self, camera: CameraModel, pose: Pose, gain: float) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.bool_]]:
+    def _background(
+        self, camera: CameraModel, pose: Pose, gain: float
+    ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.bool_]]:
         """(H, W) float brightness of sky, hills and ground; (H, W) True where ground."""
         h, w = self.shape
         R = camera.R_vehicle_camera
@@ -433,8 +556,11 @@ class Renderer:
         return (out * gain).reshape(h, w), ground.reshape(h, w)
 
     # -- objects
-    def _vehicle_faces(self, v: Vehicle, t_s: float, pose: Pose, cam_xy: FloatArray) -> tuple[list[tuple[Polygon, float]], FloatArray, FloatArray, FloatArray, float]:
-        """Visible faces; box corners (8, 3); nearest end-face centre (3,); road-forward unit (2,); distance."""
+    def _vehicle_faces(
+        self, v: Vehicle, t_s: float, pose: Pose, cam_xy: FloatArray
+    ) -> tuple[list[tuple[Polygon, float]], FloatArray, FloatArray, FloatArray, float]:
+        """Visible faces; box corners (8, 3); nearest end-face centre (3,);
+        road-forward unit (2,); distance to the camera."""
         s, d = v.trajectory.at(t_s)
         X, Y = self.scene.road.to_world(s, d)
         cx, cy = pose.to_vehicle(X, Y)
@@ -464,21 +590,35 @@ class Renderer:
             center = np.array([fc[0], fc[1], 0.0])
             for pts, grey in design:
                 faces.append((_face_points(center, right, pts), grey * shade))
-        corners = np.array([[*(c + sa * hl * f + sb * hw * left), z] for sa in (-1, 1) for sb in (-1, 1) for z in (0.0, v.height_m)])
+        corners = np.array(
+            [
+                [*(c + sa * hl * f + sb * hw * left), z]
+                for sa in (-1, 1)
+                for sb in (-1, 1)
+                for z in (0.0, v.height_m)
+            ]
+        )
         near = min(ends, key=lambda e: float(np.linalg.norm(cam_xy - e[0])))
         near_c = np.array([near[0][0], near[0][1], 0.0])
         road_f = np.array([math.cos(road_rel), math.sin(road_rel)])
         return faces, corners, near_c, road_f, float(np.linalg.norm(near[0] - cam_xy))
 
-    def _billboard(self, pos_xy: FloatArray, cam_xy: FloatArray, design: list[tuple[list[tuple[float, float]], float]]) -> list[tuple[Polygon, float]]:
+    def _billboard(
+        self,
+        pos_xy: FloatArray,
+        cam_xy: FloatArray,
+        design: list[tuple[list[tuple[float, float]], float]],
+    ) -> list[tuple[Polygon, float]]:
         los = pos_xy - cam_xy
         los /= max(float(np.linalg.norm(los)), 1e-6)
         right = np.array([los[1], -los[0]])
         center = np.array([pos_xy[0], pos_xy[1], 0.0])
         return [(_face_points(center, right, pts), grey) for pts, grey in design]
 
-    def _rail_drawables(self, pose: Pose, cam_xy: FloatArray) -> tuple[list[_Drawable], list[TruthGuardRail], list[tuple[int, FloatArray]]]:
-        """Beam pieces and posts as drawables, the truth polylines, and rail points for the radar."""
+    def _rail_drawables(
+        self, pose: Pose, cam_xy: FloatArray
+    ) -> tuple[list[_Drawable], list[TruthGuardRail], list[tuple[int, FloatArray]]]:
+        """Beam pieces and posts as drawables, truth polylines, rail points for the radar."""
         drawables: list[_Drawable] = []
         truths: list[TruthGuardRail] = []
         radar_pts: list[tuple[int, FloatArray]] = []
@@ -494,29 +634,53 @@ class Renderer:
                 X, Y = self.scene.road.to_world(ss, np.full_like(ss, rail.d_m))
                 x, y = pose.to_vehicle(X, Y)
                 # posts, a little behind the beam
-                Xp, Yp = self.scene.road.to_world(ss, np.full_like(ss, rail.d_m - 0.1 * np.sign(rail.d_m) * -1))
+                Xp, Yp = self.scene.road.to_world(
+                    ss, np.full_like(ss, rail.d_m - 0.1 * np.sign(rail.d_m) * -1)
+                )
                 xp, yp = pose.to_vehicle(Xp, Yp)
                 for j in range(len(ss) - 1):
                     p0, p1 = np.array([x[j], y[j]]), np.array([x[j + 1], y[j + 1]])
                     dist = float(np.linalg.norm(0.5 * (p0 + p1) - cam_xy))
-                    bands = [(z0, z0 + 0.1, 150.0), (z0 + 0.1, z0 + 0.2, 95.0), (z0 + 0.2, z1, 190.0)]
-                    faces = [(np.array([[*p0, za], [*p1, za], [*p1, zb], [*p0, zb]]), grey) for za, zb, grey in bands]
+                    bands = [
+                        (z0, z0 + 0.1, 150.0),
+                        (z0 + 0.1, z0 + 0.2, 95.0),
+                        (z0 + 0.2, z1, 190.0),
+                    ]
+                    faces = [
+                        (np.array([[*p0, za], [*p1, za], [*p1, zb], [*p0, zb]]), grey)
+                        for za, zb, grey in bands
+                    ]
                     drawables.append(_Drawable(dist, 0, faces))
                     if ss[j] % RAIL_POST_SPACING_M < 1.0:
                         q = np.array([xp[j], yp[j]])
                         along = (p1 - p0) / max(float(np.linalg.norm(p1 - p0)), 1e-6) * 0.07
-                        post = np.array([[*(q - along), 0.0], [*(q + along), 0.0], [*(q + along), z1 - 0.05], [*(q - along), z1 - 0.05]])
+                        post = np.array(
+                            [
+                                [*(q - along), 0.0],
+                                [*(q + along), 0.0],
+                                [*(q + along), z1 - 0.05],
+                                [*(q - along), z1 - 0.05],
+                            ]
+                        )
                         drawables.append(_Drawable(dist + 0.05, 0, [(post, 85.0)]))
                 uv, front = self.camera.project(np.column_stack([x, y, np.full_like(x, zm)]))
                 keep = front & (x > 1.0) & (np.mod(np.arange(len(x)), RAIL_TRUTH_STEP) == 0)
                 keep[-1] = bool(front[-1] and x[-1] > 1.0)
                 if keep.sum() >= 2:
-                    truths.append(TruthGuardRail(rail.id * 100 + k, rail.side, tuple((float(u), float(v)) for u, v in uv[keep])))
+                    truths.append(
+                        TruthGuardRail(
+                            rail.id * 100 + k,
+                            rail.side,
+                            tuple((float(u), float(v)) for u, v in uv[keep]),
+                        )
+                    )
                 for j in range(len(ss)):
                     radar_pts.append((rail.id, np.array([x[j], y[j]])))
         return drawables, truths, radar_pts
 
-    def render(self, t_s: float, pitch_rad: float, gain: float) -> tuple[RenderedFrame, list[tuple[int, FloatArray]], dict[int, RadarView]]:
+    def render(
+        self, t_s: float, pitch_rad: float, gain: float
+    ) -> tuple[RenderedFrame, list[tuple[int, FloatArray]], dict[int, RadarView]]:
         """Render at time t_s with the camera at `pitch_rad`.
 
         Returns the frame, guard-rail points (rail id, vehicle-frame xy) for the radar, and per
@@ -536,12 +700,20 @@ class Renderer:
             if dist > DRAW_RANGE_M or near_c[0] < -15:
                 continue
             drawables.append(_Drawable(dist, v.id, faces))
-            truth_geo[v.id] = (v.cls, near_c, corners, (v.length_m, v.width_m, v.height_m), self._velocity(v.trajectory, t_s, pose))
+            truth_geo[v.id] = (
+                v.cls,
+                near_c,
+                corners,
+                (v.length_m, v.width_m, v.height_m),
+                self._velocity(v.trajectory, t_s, pose),
+            )
             foot = corners[::2, :2][[0, 1, 3, 2]]  # z = 0 corners, in ring order
             ds, dd = self.scene.sun_shadow_offset_m
             shift = ds * road_f + dd * np.array([-road_f[1], road_f[0]])
             ctr = foot.mean(axis=0)
-            shadows.append((np.column_stack([ctr + (foot - ctr) * 1.06 + shift, np.zeros(4)]), 0.55))
+            shadows.append(
+                (np.column_stack([ctr + (foot - ctr) * 1.06 + shift, np.zeros(4)]), 0.55)
+            )
             shadows.append((np.column_stack([ctr + (foot - ctr) * 0.97, np.zeros(4)]), 0.3))
         for p in self.scene.pedestrians:
             s, d = p.trajectory.at(t_s)
@@ -552,10 +724,34 @@ class Renderer:
             if dist > DRAW_RANGE_M or pos[0] < 0:
                 continue
             walked = self._walked(p.trajectory, t_s)
-            drawables.append(_Drawable(dist, p.id, self._billboard(pos, cam_xy, _pedestrian_design(p, 2 * math.pi * walked / WALK_STEP_M))))
+            drawables.append(
+                _Drawable(
+                    dist,
+                    p.id,
+                    self._billboard(
+                        pos, cam_xy, _pedestrian_design(p, 2 * math.pi * walked / WALK_STEP_M)
+                    ),
+                )
+            )
             box = self._upright_box(pos, cam_xy, 0.5, p.height_m)
-            truth_geo[p.id] = ("pedestrian", np.array([*pos, 0.0]), box, (0.3, 0.5, p.height_m), self._velocity(p.trajectory, t_s, pose))
-            shadows.append((np.column_stack([self._ring(pos + np.array(self.scene.sun_shadow_offset_m) * 0.5, 0.35), np.zeros(12)]), 0.6))
+            truth_geo[p.id] = (
+                "pedestrian",
+                np.array([*pos, 0.0]),
+                box,
+                (0.3, 0.5, p.height_m),
+                self._velocity(p.trajectory, t_s, pose),
+            )
+            shadows.append(
+                (
+                    np.column_stack(
+                        [
+                            self._ring(pos + np.array(self.scene.sun_shadow_offset_m) * 0.5, 0.35),
+                            np.zeros(12),
+                        ]
+                    ),
+                    0.6,
+                )
+            )
         for o in self.scene.statics:
             X, Y = self.scene.road.to_world(o.s_m, o.d_m)
             x, y = pose.to_vehicle(X, Y)
@@ -565,7 +761,13 @@ class Renderer:
                 continue
             drawables.append(_Drawable(dist, o.id, self._billboard(pos, cam_xy, _static_design(o))))
             width = o.width_m if o.cls != "tree" else 0.6 * o.height_m
-            truth_geo[o.id] = (o.cls, np.array([*pos, 0.0]), self._upright_box(pos, cam_xy, width, o.height_m), (o.width_m, o.width_m, o.height_m), self._velocity(None, t_s, pose))
+            truth_geo[o.id] = (
+                o.cls,
+                np.array([*pos, 0.0]),
+                self._upright_box(pos, cam_xy, width, o.height_m),
+                (o.width_m, o.width_m, o.height_m),
+                self._velocity(None, t_s, pose),
+            )
         rail_drawables, rail_truth, rail_points = self._rail_drawables(pose, cam_xy)
         drawables += rail_drawables
 
@@ -575,7 +777,7 @@ class Renderer:
             px = proj.pixels(poly)
             if px is not None:
                 cv2.fillPoly(shade, [px], factor, lineType=cv2.LINE_AA, shift=SUBPIXEL_SHIFT)
-        shade = cv2.GaussianBlur(shade, (0, 0), 1.2)
+        shade = np.asarray(cv2.GaussianBlur(shade, (0, 0), 1.2), dtype=np.float32)
         img = np.where(ground, bg * shade, bg)
         image = np.clip(img, 0, 255).astype(np.uint8)
         labels = np.zeros(self.shape, dtype=np.uint16)
@@ -589,7 +791,8 @@ class Renderer:
                 cv2.fillPoly(image, [px], value, lineType=cv2.LINE_AA, shift=SUBPIXEL_SHIFT)
                 cv2.fillPoly(labels, [px], dr.object_id, lineType=cv2.LINE_8, shift=SUBPIXEL_SHIFT)
         objects, radar_geo = self._truth(labels, drawables, truth_geo, proj)
-        return RenderedFrame(image, labels, objects, tuple(rail_truth)), rail_points, radar_geo
+        frame = RenderedFrame(image, labels, tuple(objects), tuple(rail_truth))
+        return frame, rail_points, radar_geo
 
     @staticmethod
     def _ring(c: FloatArray, r: float, n: int = 12) -> FloatArray:
@@ -597,7 +800,9 @@ class Renderer:
         return np.column_stack([c[0] + r * np.cos(a), c[1] + r * np.sin(a)])
 
     @staticmethod
-    def _upright_box(pos: FloatArray, cam_xy: FloatArray, width: float, height: float) -> FloatArray:
+    def _upright_box(
+        pos: FloatArray, cam_xy: FloatArray, width: float, height: float
+    ) -> FloatArray:
         los = pos - cam_xy
         los /= max(float(np.linalg.norm(los)), 1e-6)
         right = np.array([los[1], -los[0]]) * width / 2
@@ -622,14 +827,20 @@ class Renderer:
         c, s = math.cos(pose.heading_rad), math.sin(pose.heading_rad)
         return np.array([c * vx + s * vy, -s * vx + c * vy])
 
-    def _truth(self, labels: npt.NDArray[np.uint16], drawables: Sequence[_Drawable], truth_geo: dict[int, _Geometry], proj: _Projector) -> tuple[list[TruthObject], dict[int, RadarView]]:
+    def _truth(
+        self,
+        labels: npt.NDArray[np.uint16],
+        drawables: Sequence[_Drawable],
+        truth_geo: dict[int, _Geometry],
+        proj: _Projector,
+    ) -> tuple[list[TruthObject], dict[int, RadarView]]:
         objects: list[TruthObject] = []
         radar_geo: dict[int, RadarView] = {}
         by_id = {dr.object_id: dr for dr in drawables if dr.object_id}
         ids, counts = np.unique(labels, return_counts=True)
         visible = dict(zip(ids.tolist(), counts.tolist(), strict=True))
         scratch = np.zeros(self.shape, dtype=np.uint8)
-        for obj_id, (cls, near_c, corners, size, vel) in truth_geo.items():
+        for obj_id, (cls, near_c, _corners, size, vel) in truth_geo.items():
             n_vis = visible.get(obj_id, 0)
             # full silhouette, drawn alone
             scratch[:] = 0
@@ -643,7 +854,12 @@ class Renderer:
             if n_vis < MIN_VISIBLE_PX:
                 continue
             rows, cols = np.nonzero(labels == obj_id)
-            box = (cols.min() - 0.5, rows.min() - 0.5, cols.max() + 0.5, rows.max() + 0.5)  # pixel edges
+            box = (
+                cols.min() - 0.5,
+                rows.min() - 0.5,
+                cols.max() + 0.5,
+                rows.max() + 0.5,
+            )  # pixel edges
             objects.append(
                 TruthObject(
                     id=obj_id,

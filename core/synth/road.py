@@ -60,10 +60,10 @@ class Road:
         return float(self.s_m[-1])
 
     def curvature(self, s_m: npt.ArrayLike) -> FloatArray:
-        return np.interp(s_m, self.s_m, self.curvature_1pm)
+        return np.interp(np.asarray(s_m, dtype=np.float64), self.s_m, self.curvature_1pm)
 
     def heading(self, s_m: npt.ArrayLike) -> FloatArray:
-        return np.interp(s_m, self.s_m, self.heading_rad)
+        return np.interp(np.asarray(s_m, dtype=np.float64), self.s_m, self.heading_rad)
 
     def to_world(self, s_m: npt.ArrayLike, d_m: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Road (s, d) -> world (X, Y)."""

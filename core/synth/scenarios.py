@@ -75,7 +75,9 @@ def _vehicle(
     )
 
 
-def _pedestrian(ids: _Ids, rng: np.random.Generator, trajectory: Trajectory, height_m: float | None = None) -> Pedestrian:
+def _pedestrian(
+    ids: _Ids, rng: np.random.Generator, trajectory: Trajectory, height_m: float | None = None
+) -> Pedestrian:
     return Pedestrian(
         id=ids(),
         height_m=float(rng.uniform(1.55, 1.9)) if height_m is None else height_m,
@@ -85,7 +87,9 @@ def _pedestrian(ids: _Ids, rng: np.random.Generator, trajectory: Trajectory, hei
     )
 
 
-def _fragments(rng: np.random.Generator, s0: float, s1: float, gaps: int) -> tuple[tuple[float, float], ...]:
+def _fragments(
+    rng: np.random.Generator, s0: float, s1: float, gaps: int
+) -> tuple[tuple[float, float], ...]:
     """(s0, s1) with `gaps` holes of 6-20 m at random places."""
     cuts = np.sort(rng.uniform(s0 + 20, s1 - 20, size=gaps))
     pieces: list[tuple[float, float]] = []
@@ -123,8 +127,16 @@ def highway(seconds: float, rng: np.random.Generator) -> Scene:
     )
     t_b = 0.45 * seconds
     ego = Trajectory.from_speed(
-        road, 0.0, 0.0,
-        [(0, v_ego), (t_b, v_ego), (t_b + 2.0, v_ego - 6.0), (t_b + 4.0, v_ego - 6.0), (0.8 * seconds, v_ego)],
+        road,
+        0.0,
+        0.0,
+        [
+            (0, v_ego),
+            (t_b, v_ego),
+            (t_b + 2.0, v_ego - 6.0),
+            (t_b + 4.0, v_ego - 6.0),
+            (0.8 * seconds, v_ego),
+        ],
         seconds,
     )
     lane = 3.75
@@ -153,34 +165,72 @@ def highway(seconds: float, rng: np.random.Generator) -> Scene:
     )
     vehicles: list[Vehicle] = []
     # Lead car in the ego lane: keeps its distance, brakes with the traffic.
-    lead_keys = [(0, v_ego), (t_b - 0.5, v_ego), (t_b + 1.5, v_ego - 6.5), (t_b + 4.0, v_ego - 6.0), (0.8 * seconds, v_ego + 0.5)]
-    vehicles.append(_vehicle(ids, rng, "car", Trajectory.from_speed(road, 32.0, 0.0, lead_keys, seconds)))
+    lead_keys = [
+        (0, v_ego),
+        (t_b - 0.5, v_ego),
+        (t_b + 1.5, v_ego - 6.5),
+        (t_b + 4.0, v_ego - 6.0),
+        (0.8 * seconds, v_ego + 0.5),
+    ]
+    vehicles.append(
+        _vehicle(ids, rng, "car", Trajectory.from_speed(road, 32.0, 0.0, lead_keys, seconds))
+    )
     # A truck in the right lane that the ego car slowly approaches (taller than a search area).
-    vehicles.append(_vehicle(ids, rng, "truck", Trajectory.from_speed(road, 42.0, -lane, [(0, 22.0)], seconds)))
+    vehicles.append(
+        _vehicle(ids, rng, "truck", Trajectory.from_speed(road, 42.0, -lane, [(0, 22.0)], seconds))
+    )
     # An overtaking car in the left lane, receding.
-    vehicles.append(_vehicle(ids, rng, "car", Trajectory.from_speed(road, 6.0, lane, [(0, 29.0)], seconds)))
+    vehicles.append(
+        _vehicle(ids, rng, "car", Trajectory.from_speed(road, 6.0, lane, [(0, 29.0)], seconds))
+    )
     # A van far ahead in the right lane.
-    vehicles.append(_vehicle(ids, rng, "van", Trajectory.from_speed(road, 70.0, -lane, [(0, 23.5)], seconds)))
+    vehicles.append(
+        _vehicle(ids, rng, "van", Trajectory.from_speed(road, 70.0, -lane, [(0, 23.5)], seconds))
+    )
     # Two cars side by side (one radar point for both, paper 001 fig. 8a), approached slowly.
-    vehicles.append(_vehicle(ids, rng, "car", Trajectory.from_speed(road, 95.0, lane, [(0, 22.5)], seconds)))
-    vehicles.append(_vehicle(ids, rng, "car", Trajectory.from_speed(road, 96.5, 0.0, [(0, 22.5)], seconds)))
+    vehicles.append(
+        _vehicle(ids, rng, "car", Trajectory.from_speed(road, 95.0, lane, [(0, 22.5)], seconds))
+    )
+    vehicles.append(
+        _vehicle(ids, rng, "car", Trajectory.from_speed(road, 96.5, 0.0, [(0, 22.5)], seconds))
+    )
     # A second truck in the left lane, passing us.
-    vehicles.append(_vehicle(ids, rng, "truck", Trajectory.from_speed(road, -25.0, lane, [(0, 28.5)], seconds)))
+    vehicles.append(
+        _vehicle(ids, rng, "truck", Trajectory.from_speed(road, -25.0, lane, [(0, 28.5)], seconds))
+    )
     # Oncoming traffic beyond the median, seen from the front.
     for k in range(int(seconds / 3)):
         cls = "truck" if k % 3 == 1 else "car"
         d = 7.9 + lane * (0.5 + (k % 2))
         s0 = 120.0 + 75.0 * k + float(rng.uniform(-10, 10))
-        vehicles.append(_vehicle(ids, rng, cls, Trajectory.from_speed(road, s0, d, [(0, -24.0)], seconds), facing_back=True))
+        vehicles.append(
+            _vehicle(
+                ids,
+                rng,
+                cls,
+                Trajectory.from_speed(road, s0, d, [(0, -24.0)], seconds),
+                facing_back=True,
+            )
+        )
     statics: list[StaticObject] = []
     for s in np.arange(60.0, s_end, 160.0):
-        statics.append(StaticObject(ids(), "sign", float(s + rng.uniform(-20, 20)), -10.6, 1.4, 3.2, 200, 8.0))
+        statics.append(
+            StaticObject(ids(), "sign", float(s + rng.uniform(-20, 20)), -10.6, 1.4, 3.2, 200, 8.0)
+        )
     for s in np.arange(30.0, s_end, 55.0):
         statics.append(StaticObject(ids(), "pole", float(s), 7.2, 0.18, 9.0, 150, 6.0))
     s_bridge = float(ego.s_m[int(0.6 * len(ego.s_m))])
     patches = [Patch(s_bridge, 5.0, 9.0, 60.0, 0.45, round_shape=False)]
     for s in rng.uniform(0, s_end, size=int(s_end / 60)):
-        patches.append(Patch(float(s), float(rng.uniform(-5, 5)), float(rng.uniform(2, 8)), float(rng.uniform(1, 3)), 0.82))
+        patches.append(
+            Patch(
+                float(s),
+                float(rng.uniform(-5, 5)),
+                float(rng.uniform(2, 8)),
+                float(rng.uniform(1, 3)),
+                0.82,
+            )
+        )
     return Scene(
         name="highway",
         seconds=seconds,
@@ -194,19 +244,33 @@ def highway(seconds: float, rng: np.random.Generator) -> Scene:
         pedestrians=(),
         statics=tuple(statics),
         guard_rails=rails,
-        illumination_keys=((0.0, 1.0), (0.3 * seconds, 1.0), (0.4 * seconds, 0.78), (0.55 * seconds, 0.8), (0.7 * seconds, 1.06)),
+        illumination_keys=(
+            (0.0, 1.0),
+            (0.3 * seconds, 1.0),
+            (0.4 * seconds, 0.78),
+            (0.55 * seconds, 0.8),
+            (0.7 * seconds, 1.06),
+        ),
     )
 
 
 def exurban(seconds: float, rng: np.random.Generator) -> Scene:
-    """Two-lane country road with curves, parked cars, pedestrians, poles, trees and their shadows."""
+    """Two-lane country road: curves, parked cars, pedestrians, poles, trees and shadows."""
     ids = _Ids()
     v_ego = 15.0
     length = v_ego * seconds + 400
     road = Road.from_segments(
-        [Segment(60, 0.0), Segment(110, 1 / 160), Segment(40, 0.0), Segment(130, -1 / 190), Segment(length, 0.0)]
+        [
+            Segment(60, 0.0),
+            Segment(110, 1 / 160),
+            Segment(40, 0.0),
+            Segment(130, -1 / 190),
+            Segment(length, 0.0),
+        ]
     )
-    ego = Trajectory.from_speed(road, 0.0, 0.0, [(0, v_ego), (0.5 * seconds, v_ego - 2), (seconds, v_ego)], seconds)
+    ego = Trajectory.from_speed(
+        road, 0.0, 0.0, [(0, v_ego), (0.5 * seconds, v_ego - 2), (seconds, v_ego)], seconds
+    )
     surfaces = (
         Surface(-60, -3.4, 84, 0.4),
         Surface(-3.4, -1.8, 128, 0.25),
@@ -218,25 +282,70 @@ def exurban(seconds: float, rng: np.random.Generator) -> Scene:
     s_end = float(ego.s_m[-1]) + 110
     vehicles: list[Vehicle] = []
     lead_keys = [(0, v_ego), (0.5 * seconds, v_ego - 2.5), (seconds, v_ego + 0.5)]
-    vehicles.append(_vehicle(ids, rng, "car", Trajectory.from_speed(road, 22.0, 0.0, lead_keys, seconds)))
-    vehicles.append(_vehicle(ids, rng, "van", Trajectory.from_speed(road, 48.0, 0.0, lead_keys, seconds)))
+    vehicles.append(
+        _vehicle(ids, rng, "car", Trajectory.from_speed(road, 22.0, 0.0, lead_keys, seconds))
+    )
+    vehicles.append(
+        _vehicle(ids, rng, "van", Trajectory.from_speed(road, 48.0, 0.0, lead_keys, seconds))
+    )
     for k in range(int(seconds / 2.5)):
         cls = "van" if k % 4 == 2 else "car"
         s0 = 90.0 + 55.0 * k + float(rng.uniform(-8, 8))
-        vehicles.append(_vehicle(ids, rng, cls, Trajectory.from_speed(road, s0, 3.5, [(0, -14.0)], seconds), facing_back=True))
+        vehicles.append(
+            _vehicle(
+                ids,
+                rng,
+                cls,
+                Trajectory.from_speed(road, s0, 3.5, [(0, -14.0)], seconds),
+                facing_back=True,
+            )
+        )
     for s in np.arange(70.0, s_end, 70.0):
         facing_back = bool(rng.integers(2))
-        vehicles.append(_vehicle(ids, rng, "car", Trajectory.from_speed(road, float(s + rng.uniform(-10, 10)), -2.7, [(0, 0.0)], seconds), facing_back))
+        vehicles.append(
+            _vehicle(
+                ids,
+                rng,
+                "car",
+                Trajectory.from_speed(
+                    road, float(s + rng.uniform(-10, 10)), -2.7, [(0, 0.0)], seconds
+                ),
+                facing_back,
+            )
+        )
     pedestrians: list[Pedestrian] = []
     for s in np.arange(45.0, s_end, 60.0):
         s0 = float(s + rng.uniform(-10, 10))
-        pedestrians.append(_pedestrian(ids, rng, Trajectory.from_waypoints([(0, s0, -4.3), (seconds, s0 + 1.3 * seconds, -4.3)])))
+        pedestrians.append(
+            _pedestrian(
+                ids,
+                rng,
+                Trajectory.from_waypoints([(0, s0, -4.3), (seconds, s0 + 1.3 * seconds, -4.3)]),
+            )
+        )
     for s in np.arange(80.0, s_end, 95.0):
-        pedestrians.append(_pedestrian(ids, rng, Trajectory.from_waypoints([(0, float(s), -3.9), (seconds, float(s), -3.9)])))
+        pedestrians.append(
+            _pedestrian(
+                ids,
+                rng,
+                Trajectory.from_waypoints([(0, float(s), -3.9), (seconds, float(s), -3.9)]),
+            )
+        )
     t_cross = 0.55 * seconds
     s_cross = float(ego.at(t_cross)[0]) + 26.0
     pedestrians.append(
-        _pedestrian(ids, rng, Trajectory.from_waypoints([(0, s_cross, 7.5), (t_cross - 5, s_cross, 7.5), (t_cross + 3, s_cross, -4.5), (seconds + 1, s_cross, -4.5)]))
+        _pedestrian(
+            ids,
+            rng,
+            Trajectory.from_waypoints(
+                [
+                    (0, s_cross, 7.5),
+                    (t_cross - 5, s_cross, 7.5),
+                    (t_cross + 3, s_cross, -4.5),
+                    (seconds + 1, s_cross, -4.5),
+                ]
+            ),
+        )
     )
     statics: list[StaticObject] = []
     patches: list[Patch] = []
@@ -246,9 +355,28 @@ def exurban(seconds: float, rng: np.random.Generator) -> Scene:
         for s in np.arange(10.0, s_end, 22.0):
             s_t = float(s + rng.uniform(-6, 6))
             d_t = side * float(rng.uniform(7.0, 10.0))
-            statics.append(StaticObject(ids(), "tree", s_t, d_t, float(rng.uniform(0.3, 0.5)), float(rng.uniform(6, 10)), 55, 4.0))
+            statics.append(
+                StaticObject(
+                    ids(),
+                    "tree",
+                    s_t,
+                    d_t,
+                    float(rng.uniform(0.3, 0.5)),
+                    float(rng.uniform(6, 10)),
+                    55,
+                    4.0,
+                )
+            )
             if side == 1 and rng.uniform() < 0.6:  # sun from the left: shadows fall across the road
-                patches.append(Patch(s_t + 1.5, d_t - 7.0, float(rng.uniform(3, 6)), float(rng.uniform(7, 11)), 0.55))
+                patches.append(
+                    Patch(
+                        s_t + 1.5,
+                        d_t - 7.0,
+                        float(rng.uniform(3, 6)),
+                        float(rng.uniform(7, 11)),
+                        0.55,
+                    )
+                )
     for s in np.arange(100.0, s_end, 130.0):
         statics.append(StaticObject(ids(), "sign", float(s), -4.0, 0.7, 2.6, 215, 8.0))
     rails = (GuardRail(ids(), "right", -3.7, _fragments(rng, 55.0, 175.0, gaps=1)),)
@@ -298,25 +426,102 @@ def stop_and_go(seconds: float, rng: np.random.Generator) -> Scene:
         t_g = t_go - 1.5 + 0.8 * k
         s0 = stop_at - _stop_distance(v0, t_b)
         traj = Trajectory.from_speed(road, s0, 0.0, _stop_keys(v0, t_b, t_g, 6.5), seconds)
-        vehicles.append(Vehicle(veh.id, veh.cls, veh.length_m, veh.width_m, veh.height_m, veh.body_grey, traj, False, veh.radar_rcs_dbsm))
+        vehicles.append(
+            Vehicle(
+                veh.id,
+                veh.cls,
+                veh.length_m,
+                veh.width_m,
+                veh.height_m,
+                veh.body_grey,
+                traj,
+                False,
+                veh.radar_rcs_dbsm,
+            )
+        )
     for k in range(5):
         s0 = 8.0 + 14.0 * k + float(rng.uniform(-2, 2))
         keys = [(0, 5.0), (0.3 * seconds, 1.5), (0.6 * seconds, 4.0), (seconds, 3.0)]
-        vehicles.append(_vehicle(ids, rng, "van" if k == 2 else "car", Trajectory.from_speed(road, s0, 3.4, keys, seconds)))
+        vehicles.append(
+            _vehicle(
+                ids,
+                rng,
+                "van" if k == 2 else "car",
+                Trajectory.from_speed(road, s0, 3.4, keys, seconds),
+            )
+        )
     pedestrians: list[Pedestrian] = []
     t_stand = t_brake + v0 / BRAKING_MPS2
-    pedestrians.append(_pedestrian(ids, rng, Trajectory.from_waypoints([(0, s_zebra + 1.0, -5.0), (t_stand + 0.5, s_zebra + 1.0, -5.0), (t_stand + 8.5, s_zebra + 1.0, 6.2), (seconds + 1, s_zebra + 1.0, 6.2)])))
-    pedestrians.append(_pedestrian(ids, rng, Trajectory.from_waypoints([(0, s_zebra + 2.5, 6.5), (t_stand + 2.0, s_zebra + 2.5, 6.5), (t_stand + 10.0, s_zebra + 2.5, -4.5), (seconds + 1, s_zebra + 2.5, -4.5)])))
-    pedestrians.append(_pedestrian(ids, rng, Trajectory.from_waypoints([(0, s_zebra - 1.0, -3.0), (seconds, s_zebra - 1.0, -3.0)]), height_m=1.2))
-    pedestrians.append(_pedestrian(ids, rng, Trajectory.from_waypoints([(0, s_zebra + 25.0, -3.8), (seconds, s_zebra + 25.0 - 1.2 * seconds, -3.8)])))
+    pedestrians.append(
+        _pedestrian(
+            ids,
+            rng,
+            Trajectory.from_waypoints(
+                [
+                    (0, s_zebra + 1.0, -5.0),
+                    (t_stand + 0.5, s_zebra + 1.0, -5.0),
+                    (t_stand + 8.5, s_zebra + 1.0, 6.2),
+                    (seconds + 1, s_zebra + 1.0, 6.2),
+                ]
+            ),
+        )
+    )
+    pedestrians.append(
+        _pedestrian(
+            ids,
+            rng,
+            Trajectory.from_waypoints(
+                [
+                    (0, s_zebra + 2.5, 6.5),
+                    (t_stand + 2.0, s_zebra + 2.5, 6.5),
+                    (t_stand + 10.0, s_zebra + 2.5, -4.5),
+                    (seconds + 1, s_zebra + 2.5, -4.5),
+                ]
+            ),
+        )
+    )
+    pedestrians.append(
+        _pedestrian(
+            ids,
+            rng,
+            Trajectory.from_waypoints([(0, s_zebra - 1.0, -3.0), (seconds, s_zebra - 1.0, -3.0)]),
+            height_m=1.2,
+        )
+    )
+    pedestrians.append(
+        _pedestrian(
+            ids,
+            rng,
+            Trajectory.from_waypoints(
+                [(0, s_zebra + 25.0, -3.8), (seconds, s_zebra + 25.0 - 1.2 * seconds, -3.8)]
+            ),
+        )
+    )
     statics: list[StaticObject] = []
     for s in np.arange(12.0, 250.0, 24.0):
         statics.append(StaticObject(ids(), "pole", float(s), -4.8, 0.2, 8.0, 160, 6.0))
     statics.append(StaticObject(ids(), "sign", s_zebra - 2.0, -3.2, 0.6, 2.5, 220, 8.0))
     for s in np.arange(6.0, 250.0, 18.0):
-        statics.append(StaticObject(ids(), "tree", float(s + rng.uniform(-4, 4)), float(rng.uniform(8.0, 10.0)), 0.35, 7.0, 55, 4.0))
+        statics.append(
+            StaticObject(
+                ids(),
+                "tree",
+                float(s + rng.uniform(-4, 4)),
+                float(rng.uniform(8.0, 10.0)),
+                0.35,
+                7.0,
+                55,
+                4.0,
+            )
+        )
     patches = tuple(
-        Patch(float(s), float(rng.uniform(-1, 4)), float(rng.uniform(4, 7)), float(rng.uniform(6, 9)), 0.55)
+        Patch(
+            float(s),
+            float(rng.uniform(-1, 4)),
+            float(rng.uniform(4, 7)),
+            float(rng.uniform(6, 9)),
+            0.55,
+        )
         for s in rng.uniform(-10, 200, size=8)
     )
     return Scene(

@@ -50,8 +50,15 @@ class RadarModel:
     amplitude_offset_db: float = 55.0
 
 
-def _amplitude(rcs_dbsm: float, range_m: float, model: RadarModel, rng: np.random.Generator) -> float:
-    return float(rcs_dbsm - 40.0 * math.log10(max(range_m, 1.0)) + model.amplitude_offset_db + rng.normal(0, 1.5))
+def _amplitude(
+    rcs_dbsm: float, range_m: float, model: RadarModel, rng: np.random.Generator
+) -> float:
+    return float(
+        rcs_dbsm
+        - 40.0 * math.log10(max(range_m, 1.0))
+        + model.amplitude_offset_db
+        + rng.normal(0, 1.5)
+    )
 
 
 def _target(
@@ -72,10 +79,21 @@ def _target(
         return None
     # relative velocity of the point as the moving, turning radar sees it
     v_rel = np.array(
-        [velocity_mps[0] - ego_speed_mps + ego_yaw_rate_radps * p_xy[1], velocity_mps[1] - ego_yaw_rate_radps * p_xy[0]]
+        [
+            velocity_mps[0] - ego_speed_mps + ego_yaw_rate_radps * p_xy[1],
+            velocity_mps[1] - ego_yaw_rate_radps * p_xy[0],
+        ]
     )
     range_rate = float(np.dot(v_rel, rel) / max(float(np.hypot(*rel)), 1e-6))
-    return RadarTarget.from_polar(rng_m, az, range_rate, _amplitude(rcs_dbsm, rng_m, model, rng), mount.x_m, mount.y_m, mount.yaw_rad)
+    return RadarTarget.from_polar(
+        rng_m,
+        az,
+        range_rate,
+        _amplitude(rcs_dbsm, rng_m, model, rng),
+        mount.x_m,
+        mount.y_m,
+        mount.yaw_rad,
+    )
 
 
 def radar_scan(
@@ -103,46 +121,65 @@ def radar_scan(
     in_range = {
         v.id: views[v.id]
         for v in scene.vehicles
-        if v.id in views and 0 < views[v.id].near_m[0] and float(np.hypot(*views[v.id].near_m[:2])) < model.max_range_m + 5
+        if v.id in views
+        and 0 < views[v.id].near_m[0]
+        and float(np.hypot(*views[v.id].near_m[:2])) < model.max_range_m + 5
     }
-    p_detect = model.detect_probability * (model.traffic_detect_factor if len(in_range) > model.traffic_vehicles else 1.0)
+    p_detect = model.detect_probability * (
+        model.traffic_detect_factor if len(in_range) > model.traffic_vehicles else 1.0
+    )
     detected = []
     for v in scene.vehicles:
         view = in_range.get(v.id)
         if view is None:
             continue
         frac = view.visible_fraction
-        p = p_detect if frac > 0.5 else (0.45 * p_detect if frac > 0.2 else 0.05)
-        if rng.uniform() < p:
+        prob = p_detect if frac > 0.5 else (0.45 * p_detect if frac > 0.2 else 0.05)
+        if rng.uniform() < prob:
             detected.append(v)
     # one point for two vehicles close together (paper 001 fig. 8a)
     merged: set[int] = set()
-    for a in detected:
-        for b in detected:
-            if a.id >= b.id or a.id in merged or b.id in merged:
+    for va in detected:
+        for vb in detected:
+            if va.id >= vb.id or va.id in merged or vb.id in merged:
                 continue
-            pa, pb = in_range[a.id].near_m[:2], in_range[b.id].near_m[:2]
-            if abs(pa[0] - pb[0]) < model.merge_range_m and abs(pa[1] - pb[1]) < model.merge_lateral_m and rng.uniform() < model.merge_probability:
-                merged |= {a.id, b.id}
-                vel = 0.5 * (in_range[a.id].velocity_mps + in_range[b.id].velocity_mps)
-                emit(a.id, 0.5 * (pa + pb), vel, max(a.radar_rcs_dbsm, b.radar_rcs_dbsm))
-                seen.add(b.id)
+            pa, pb = in_range[va.id].near_m[:2], in_range[vb.id].near_m[:2]
+            if (
+                abs(pa[0] - pb[0]) < model.merge_range_m
+                and abs(pa[1] - pb[1]) < model.merge_lateral_m
+                and rng.uniform() < model.merge_probability
+            ):
+                merged |= {va.id, vb.id}
+                vel = 0.5 * (in_range[va.id].velocity_mps + in_range[vb.id].velocity_mps)
+                emit(va.id, 0.5 * (pa + pb), vel, max(va.radar_rcs_dbsm, vb.radar_rcs_dbsm))
+                seen.add(vb.id)
     for v in detected:
         if v.id in merged:
             continue
         view = in_range[v.id]
         near = view.near_m[:2]
-        across = np.array([-near[1], near[0]]) / max(float(np.hypot(*near)), 1e-6)  # unit, to the left of the line of sight
-        points = 1 + int(v.cls != "car" and rng.uniform() < model.extra_point_probability) + int(v.cls == "truck" and rng.uniform() < 0.4)
+        # unit vector to the left of the line of sight
+        across = np.array([-near[1], near[0]]) / max(float(np.hypot(*near)), 1e-6)
+        points = (
+            1
+            + int(v.cls != "car" and rng.uniform() < model.extra_point_probability)
+            + int(v.cls == "truck" and rng.uniform() < 0.4)
+        )
         for _ in range(points):
             if rng.uniform() < model.off_object_probability:
                 offset = float(rng.choice([-1.0, 1.0])) * (v.width_m / 2 + rng.uniform(0.2, 0.8))
             else:
-                offset = float(np.clip(rng.normal(0, model.lateral_sigma_m), -v.width_m / 2, v.width_m / 2))
+                offset = float(
+                    np.clip(rng.normal(0, model.lateral_sigma_m), -v.width_m / 2, v.width_m / 2)
+                )
             emit(v.id, near + offset * across, view.velocity_mps, v.radar_rcs_dbsm)
     for p in scene.pedestrians:
         view = views.get(p.id)
-        if view is not None and view.visible_fraction > 0.3 and rng.uniform() < model.pedestrian_probability:
+        if (
+            view is not None
+            and view.visible_fraction > 0.3
+            and rng.uniform() < model.pedestrian_probability
+        ):
             emit(p.id, view.near_m[:2], view.velocity_mps, p.radar_rcs_dbsm)
     for o in scene.statics:
         view = views.get(o.id)
@@ -157,7 +194,12 @@ def radar_scan(
     for _ in range(rng.poisson(model.false_alarms_per_scan)):
         r = rng.uniform(5.0, model.max_range_m)
         a = rng.uniform(-model.half_fov_rad, model.half_fov_rad)
-        emit(0, np.array([mount.x_m + r * math.cos(a), mount.y_m + r * math.sin(a)]), np.zeros(2), -5.0)
+        emit(
+            0,
+            np.array([mount.x_m + r * math.cos(a), mount.y_m + r * math.sin(a)]),
+            np.zeros(2),
+            -5.0,
+        )
     return targets, seen
 
 
@@ -167,8 +209,10 @@ SUSPENSION_TIME_S = 0.25  # the body's pitch follows braking with this lag
 ROUGHNESS_FULL_SPEED_MPS = 15.0  # road roughness reaches full amplitude at this speed
 
 
-def pitch_profile(scene: Scene, calibrated_pitch_rad: float, t_s: FloatArray, rng: np.random.Generator) -> FloatArray:
-    """True camera pitch (rad, positive nose down) at times t_s: calibration + roughness + braking."""
+def pitch_profile(
+    scene: Scene, calibrated_pitch_rad: float, t_s: FloatArray, rng: np.random.Generator
+) -> FloatArray:
+    """True camera pitch (rad, positive nose down) at t_s: calibration, roughness, braking."""
     fine_t = np.arange(0.0, float(t_s.max()) + 1.0, 0.01)
     speed = np.array([scene.ego_speed_mps(float(t)) for t in fine_t])
     accel = np.gradient(speed, fine_t)
@@ -178,7 +222,9 @@ def pitch_profile(scene: Scene, calibrated_pitch_rad: float, t_s: FloatArray, rn
         brake[k] = brake[k - 1] + alpha * (-accel[k] - brake[k - 1])
     f1, f2 = rng.uniform(1.0, 1.4), rng.uniform(1.5, 2.0)
     ph1, ph2 = rng.uniform(0, 2 * math.pi, size=2)
-    rough = 0.65 * np.sin(2 * math.pi * f1 * fine_t + ph1) + 0.35 * np.sin(2 * math.pi * f2 * fine_t + ph2)
+    rough = 0.65 * np.sin(2 * math.pi * f1 * fine_t + ph1) + 0.35 * np.sin(
+        2 * math.pi * f2 * fine_t + ph2
+    )
     amp = scene.pitch_roughness_rad * np.clip(speed / ROUGHNESS_FULL_SPEED_MPS, 0.0, 1.0)
     pitch = calibrated_pitch_rad + amp * rough + scene.pitch_per_decel_rad_per_mps2 * brake
     return np.interp(t_s, fine_t, pitch)
@@ -195,7 +241,9 @@ class CanModel:
     yaw_sigma_radps: float = math.radians(0.12)
 
 
-def vehicle_states(scene: Scene, rng: np.random.Generator, model: CanModel = CanModel()) -> list[tuple[float, float, float]]:
+def vehicle_states(
+    scene: Scene, rng: np.random.Generator, model: CanModel = CanModel()
+) -> list[tuple[float, float, float]]:
     """(t_s, speed_mps, yaw_rate_radps) as the car's sensors report them; standing still reads
     exactly 0 m/s (wheel pulses stop) while the gyro keeps its bias and noise."""
     out = []
@@ -203,15 +251,25 @@ def vehicle_states(scene: Scene, rng: np.random.Generator, model: CanModel = Can
         t = float(t)
         speed = scene.ego_speed_mps(t)
         yaw = scene.ego_yaw_rate_radps(t)
-        measured_speed = max(speed + rng.normal(0, model.speed_sigma_mps), 0.0) if speed > 0.05 else 0.0
-        out.append((t, measured_speed, yaw + model.yaw_bias_radps + float(rng.normal(0, model.yaw_sigma_radps))))
+        measured_speed = (
+            max(speed + rng.normal(0, model.speed_sigma_mps), 0.0) if speed > 0.05 else 0.0
+        )
+        out.append(
+            (
+                t,
+                measured_speed,
+                yaw + model.yaw_bias_radps + float(rng.normal(0, model.yaw_sigma_radps)),
+            )
+        )
     return out
 
 
 # --- camera ----------------------------------------------------------------------------------
 
 OPTICS_BLUR_SIGMA_PX = 0.6
-NOISE_SIGMA_GREY = 0.3  # with rounding about 0.42 DN; small because PNG pays for every bit of noise and the bundled drives must stay small
+# About 0.42 DN with rounding: small, because PNG pays for every bit of noise and the
+# bundled drives must stay small.
+NOISE_SIGMA_GREY = 0.3
 
 
 def camera_noise(image: npt.NDArray[np.uint8], rng: np.random.Generator) -> npt.NDArray[np.uint8]:

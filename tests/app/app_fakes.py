@@ -18,11 +18,10 @@ FRAME_PERIOD_NS = 40_000_000
 
 @dataclass(frozen=True)
 class Recordings:
-    """A recordings root, the recording the tests open, and where it came from."""
+    """A recordings root and the recording the tests open."""
 
     root: Path
     name: str
-    source: str  # "synth", "bundled" or "writer"
 
 
 def fake_camera() -> CameraModel:
@@ -77,24 +76,3 @@ class FakeDrive:
 
     def close(self) -> None:
         self.closed = True
-
-
-def write_fake_recording(out_dir: Path, frames: int) -> Path:
-    """`FakeDrive(frames)` written as a real recording folder with the project's writer."""
-    from core.io import RecordingWriter
-    from core.io.calibration import Calibration, RadarMount
-
-    fake = FakeDrive(frames=frames, name=out_dir.name)
-    calibration = Calibration(fake.camera, RadarMount(x_m=0.0, y_m=0.0))
-    with RecordingWriter(out_dir, name=out_dir.name, calibration=calibration) as writer:
-        truths = []
-        for i in range(frames):
-            frame = fake.frame(i)
-            writer.add_image(frame.t_ns, np.array(frame.image))
-            writer.add_radar_scan(frame.t_ns, frame.radar)
-            writer.add_vehicle_state(frame.t_ns, frame.speed_mps, frame.yaw_rate_radps)
-            truth = fake.truth(i)
-            assert truth is not None
-            truths.append(truth)
-        writer.set_groundtruth(truths)
-    return out_dir

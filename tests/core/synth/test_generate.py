@@ -17,7 +17,9 @@ BUNDLED = Path(__file__).resolve().parents[3] / "recordings"
 
 
 def _files(folder: Path) -> dict[str, bytes]:
-    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+    return {
+        str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()
+    }
 
 
 def test_same_seed_same_bytes_and_another_seed_differs(tmp_path: Path) -> None:
@@ -25,12 +27,20 @@ def test_same_seed_same_bytes_and_another_seed_differs(tmp_path: Path) -> None:
     b = generate("exurban", 0.8, 5, tmp_path / "b" / "drive")
     c = generate("exurban", 0.8, 6, tmp_path / "c" / "drive")
     files_a, files_b = _files(a), _files(b)
-    assert set(files_a) >= {"recording.yaml", "calibration.yaml", "groundtruth.json", "vehicle.blf", "vehicle.dbc"}
+    assert set(files_a) >= {
+        "recording.yaml",
+        "calibration.yaml",
+        "groundtruth.json",
+        "vehicle.blf",
+        "vehicle.dbc",
+    }
     assert files_a == files_b
     assert _files(c)["groundtruth.json"] != files_a["groundtruth.json"]
 
 
-def test_cli_synth_writes_a_recording_the_reader_opens(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_synth_writes_a_recording_the_reader_opens(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     out = tmp_path / "hw"
     assert main(["synth", "--scenario", "highway", "--seconds", "1", "--seed", "2", str(out)]) == 0
     with Drive(out) as drive:
@@ -50,13 +60,17 @@ def test_cli_synth_writes_a_recording_the_reader_opens(tmp_path: Path, capsys: p
         (["--seconds", "1", "--seed", "-3"], "seed: expected an integer >= 0, got -3"),
     ],
 )
-def test_cli_synth_refuses_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], message: str) -> None:
+def test_cli_synth_refuses_bad_arguments(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], message: str
+) -> None:
     assert main(["synth", "--scenario", "highway", *args, str(tmp_path / "x")]) == 2
     assert message in capsys.readouterr().err
     assert not (tmp_path / "x").exists()
 
 
-def test_cli_synth_names_the_scenarios_it_knows(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_synth_names_the_scenarios_it_knows(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     with pytest.raises(SystemExit):
         main(["synth", "--scenario", "city", str(tmp_path / "x")])
     err = capsys.readouterr().err
@@ -100,11 +114,16 @@ def test_radar_points_fall_near_the_vehicles_they_came_from(highway: Drive) -> N
         for o in truth.objects:
             if not o.radar_seen or o.cls not in ("car", "van", "truck"):
                 continue
-            d = min((math.hypot(t.x_m - o.position_m[0], t.y_m - o.position_m[1]) for t in frame.radar), default=99.0)
+            d = min(
+                (math.hypot(t.x_m - o.position_m[0], t.y_m - o.position_m[1]) for t in frame.radar),
+                default=99.0,
+            )
             hits += d < 3.0
             misses += d >= 3.0
     assert hits > 20
-    assert misses <= 0.25 * hits  # a few points merged between two vehicles or thrown off the vehicle
+    assert (
+        misses <= 0.25 * hits
+    )  # a few points merged between two vehicles or thrown off the vehicle
 
 
 def test_guard_rails_give_many_slow_radar_returns(highway: Drive) -> None:
@@ -112,7 +131,13 @@ def test_guard_rails_give_many_slow_radar_returns(highway: Drive) -> None:
     for i in range(0, len(highway), 10):
         frame = highway.frame(i)
         # over-ground speed along the line of sight of a stationary target is ~0
-        slow.append(sum(abs(t.range_rate_mps + frame.speed_mps * math.cos(t.azimuth_rad)) < 1.0 and abs(t.y_m) > 6 for t in frame.radar))
+        slow.append(
+            sum(
+                abs(t.range_rate_mps + frame.speed_mps * math.cos(t.azimuth_rad)) < 1.0
+                and abs(t.y_m) > 6
+                for t in frame.radar
+            )
+        )
     assert np.mean(slow) >= 2
 
 
@@ -130,5 +155,10 @@ def test_stop_and_go_stands_still_with_a_biased_gyro(stop_and_go: Drive) -> None
     assert standing.sum() >= 30  # at least 3 s standing still
     assert abs(np.mean(yaw[standing]) - math.radians(-0.4)) < math.radians(0.25)
     assert speeds.max() > 7.0
-    crossing = [o for i in np.nonzero(standing)[0] for o in stop_and_go.truth(int(i)).objects if o.cls == "pedestrian" and abs(o.position_m[1]) < 1.5]  # type: ignore[union-attr]
+    crossing = [
+        o
+        for i in np.nonzero(standing)[0]
+        for o in stop_and_go.truth(int(i)).objects
+        if o.cls == "pedestrian" and abs(o.position_m[1]) < 1.5
+    ]  # type: ignore[union-attr]
     assert crossing  # people cross in front of the standing car

@@ -20,14 +20,20 @@ def highway_frames() -> list:
     rng = np.random.default_rng(7)
     scene = SCENARIOS["highway"](12.0, rng)
     renderer = Renderer(scene, CAMERA, rng)
-    return [renderer.render(t, CAMERA_PITCH_RAD + 0.004 * math.sin(t), 1.0)[0] for t in (0.5, 2.0, 4.0, 6.5)]
+    return [
+        renderer.render(t, CAMERA_PITCH_RAD + 0.004 * math.sin(t), 1.0)[0]
+        for t in (0.5, 2.0, 4.0, 6.5)
+    ]
 
 
 def _clear_vehicles(frame, max_lateral_m: float):
     return [
         o
         for o in frame.objects
-        if o.cls in ("car", "van", "truck") and o.occlusion < 0.02 and abs(o.position_m[1]) < max_lateral_m and 6 < o.position_m[0] < 60
+        if o.cls in ("car", "van", "truck")
+        and o.occlusion < 0.02
+        and abs(o.position_m[1]) < max_lateral_m
+        and 6 < o.position_m[0] < 60
     ]
 
 
@@ -36,12 +42,14 @@ def test_truth_box_bottom_and_width_follow_the_camera_model(highway_frames: list
     for t, frame in zip((0.5, 2.0, 4.0, 6.5), highway_frames, strict=True):
         cam = CAMERA.with_pitch(CAMERA_PITCH_RAD + 0.004 * math.sin(t))
         for o in _clear_vehicles(frame, 1.0):
-            u0, v0, u1, v1 = o.box_px
-            (u, v), = cam.project(np.array([o.position_m]))[0]
+            u0, _v0, u1, v1 = o.box_px
+            ((u, v),) = cam.project(np.array([o.position_m]))[0]
             x_cam = o.position_m[0] - cam.extrinsics.x_m
             expected_width_px = cam.intrinsics.fx_px * o.size_m[1] / x_cam
             assert u0 - 1 <= u <= u1 + 1
-            assert v == pytest.approx(v1, abs=1.5)  # the base of the nearest face is the lowest pixel
+            assert v == pytest.approx(
+                v1, abs=1.5
+            )  # the base of the nearest face is the lowest pixel
             assert (u1 - u0) == pytest.approx(expected_width_px, abs=2.5)
             checked += 1
     assert checked >= 3
@@ -51,13 +59,15 @@ def test_vehicles_seen_from_behind_are_symmetric_with_a_dark_base(highway_frames
     checked = 0
     for frame in highway_frames:
         for o in _clear_vehicles(frame, 0.3):
-            u0, v0, u1, v1 = (int(round(c)) for c in o.box_px)
+            u0, v0, u1, v1 = (round(c) for c in o.box_px)
             if u1 - u0 < 24:
                 continue
             crop = frame.image[v0:v1, u0:u1].astype(float)
             asym = np.abs(crop - crop[:, ::-1]).mean()
             assert asym < 0.15 * crop.std() + 3.0
-            base = frame.image[v1 - max((v1 - v0) // 8, 2) : v1, u0 + (u1 - u0) // 4 : u1 - (u1 - u0) // 4].mean()
+            base = frame.image[
+                v1 - max((v1 - v0) // 8, 2) : v1, u0 + (u1 - u0) // 4 : u1 - (u1 - u0) // 4
+            ].mean()
             road = frame.image[v1 + 2 : v1 + 8, u0:u1].mean()
             assert base < road - 15  # the shadow beneath the vehicle (paper 001)
             checked += 1
@@ -82,7 +92,12 @@ def test_labels_match_truth_boxes(highway_frames: list) -> None:
     for frame in highway_frames:
         for o in frame.objects:
             rows, cols = np.nonzero(frame.labels == o.id)
-            assert (cols.min() - 0.5, rows.min() - 0.5, cols.max() + 0.5, rows.max() + 0.5) == o.box_px
+            assert (
+                cols.min() - 0.5,
+                rows.min() - 0.5,
+                cols.max() + 0.5,
+                rows.max() + 0.5,
+            ) == o.box_px
 
 
 def test_pedestrians_have_a_human_aspect_ratio() -> None:
