@@ -56,7 +56,11 @@ def _cmd_serve(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
-    serve(root, args.recording, args.host, args.port)
+    try:
+        serve(root, args.recording, args.host, args.port)
+    except ValueError as err:
+        print(f"fusionscope serve: {err}", file=sys.stderr)
+        return 2
     return 0
 
 
