@@ -1,4 +1,5 @@
-"""Pinhole camera on a car: vehicle-frame points <-> image pixels, the road plane, the bird's-eye grid.
+"""Pinhole camera on a car: vehicle-frame points <-> image pixels, the road plane, the
+bird's-eye grid.
 
 Frames (the README has the table):
 
@@ -7,7 +8,8 @@ Frames (the README has the table):
 - image: (u, v) pixels, u = column to the right, v = row down, origin at the top-left
   corner of the top-left pixel's centre (OpenCV convention: pixel (0, 0) is centred at 0.0).
 - bird's-eye grid: (col, row) cells; row 0 is the farthest x (ahead is up), col 0 the
-  leftmost y, cell (c, r) centred at x = x_max_m - (r + 0.5) * cell_m, y = y_max_m - (c + 0.5) * cell_m.
+  leftmost y, cell (c, r) centred at x = x_max_m - (r + 0.5) * cell_m,
+  y = y_max_m - (c + 0.5) * cell_m.
 
 Orientation: R_vehicle_camera = Rz(yaw) @ Ry(pitch) @ Rx(roll) @ R_vehicle_optical, with
 pitch_rad > 0 when the optical axis tilts down towards the road (the horizon then rises
@@ -35,6 +37,10 @@ R_VEHICLE_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0
 
 # A ray must point below the horizon by at least this much to meet the road ahead.
 MIN_RAY_DESCENT = 1e-9
+
+# cv2.undistortPoints stops after 5 fixed-point iterations by default, which leaves errors of
+# ~1e-3 px for k1 = -0.3 near the image edge; iterate to convergence instead.
+UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
 
 
 def _rot_x(a: float) -> FloatArray:
@@ -95,12 +101,11 @@ class Intrinsics:
             )
         if len(self.distortion) not in (0, 4, 5, 8):
             raise ValueError(
-                f"distortion: expected 0, 4, 5 or 8 OpenCV coefficients, "
-                f"got {len(self.distortion)}"
+                f"distortion: expected 0, 4, 5 or 8 OpenCV coefficients, got {len(self.distortion)}"
             )
 
     @property
-    def K(self) -> FloatArray:
+    def K(self) -> FloatArray:  # noqa: N802 (frame-naming convention, STYLE 6)
         """(3, 3) camera matrix."""
         return np.array(
             [[self.fx_px, 0.0, self.cx_px], [0.0, self.fy_px, self.cy_px], [0.0, 0.0, 1.0]]
@@ -117,6 +122,10 @@ class Intrinsics:
     @classmethod
     def from_fov(cls, width_px: int, height_px: int, horizontal_fov_rad: float) -> Intrinsics:
         """Square pixels, principal point at the image centre."""
+        if not 0.0 < horizontal_fov_rad < math.pi:
+            raise ValueError(
+                f"horizontal_fov_rad: expected 0 < fov < pi, got {horizontal_fov_rad!r}"
+            )
         f = (width_px / 2.0) / math.tan(horizontal_fov_rad / 2.0)
         return cls(f, f, (width_px - 1) / 2.0, (height_px - 1) / 2.0, width_px, height_px)
 
@@ -136,7 +145,9 @@ class Extrinsics:
         for name in ("height_m", "x_m", "y_m", "pitch_rad", "yaw_rad", "roll_rad"):
             _finite(name, getattr(self, name))
         if self.height_m <= 0:
-            raise ValueError(f"height_m: expected a camera above the road (> 0), got {self.height_m}")
+            raise ValueError(
+                f"height_m: expected a camera above the road (> 0), got {self.height_m}"
+            )
         for name in ("pitch_rad", "yaw_rad", "roll_rad"):
             if abs(getattr(self, name)) >= math.pi / 2:
                 raise ValueError(f"{name}: expected |angle| < pi/2, got {getattr(self, name)}")
@@ -175,7 +186,7 @@ class BirdEyeGrid:
         return rows, cols
 
     @property
-    def T_grid_ground(self) -> FloatArray:
+    def T_grid_ground(self) -> FloatArray:  # noqa: N802 (frame-naming convention, STYLE 6)
         """(3, 3) map from road-plane (x_m, y_m, 1) to grid (col, row, 1)."""
         s = 1.0 / self.cell_m
         return np.array(
@@ -214,6 +225,10 @@ class CameraModel:
     rows_used_px: tuple[int, int] | None = None
 
     def __post_init__(self) -> None:
+        if self.rows_used_px is not None and len(self.rows_used_px) != 2:
+            raise ValueError(
+                f"rows_used_px: expected (first, stop) or None, got {self.rows_used_px!r}"
+            )
         first, stop = self.row_window_px
         if not 0 <= first < stop <= self.intrinsics.height_px:
             raise ValueError(
@@ -230,11 +245,12 @@ class CameraModel:
 
     # --- pose ---------------------------------------------------------------------------
     def with_pitch(self, pitch_rad: float) -> CameraModel:
-        """The same camera with the pitch replaced (the engine feeds each frame's detected pitch)."""
+        """The same camera with the pitch replaced (the engine feeds each frame's detected
+        pitch)."""
         return replace(self, extrinsics=replace(self.extrinsics, pitch_rad=pitch_rad))
 
     @property
-    def R_vehicle_camera(self) -> FloatArray:
+    def R_vehicle_camera(self) -> FloatArray:  # noqa: N802 (frame-naming convention, STYLE 6)
         e = self.extrinsics
         return _rot_z(e.yaw_rad) @ _rot_y(e.pitch_rad) @ _rot_x(e.roll_rad) @ R_VEHICLE_OPTICAL
 
@@ -244,7 +260,7 @@ class CameraModel:
         return np.array([e.x_m, e.y_m, e.height_m])
 
     @property
-    def T_vehicle_camera(self) -> FloatArray:
+    def T_vehicle_camera(self) -> FloatArray:  # noqa: N802 (frame-naming convention, STYLE 6)
         """(4, 4) maps camera-frame points into the vehicle frame."""
         T = np.eye(4)
         T[:3, :3] = self.R_vehicle_camera
@@ -252,7 +268,7 @@ class CameraModel:
         return T
 
     @property
-    def T_camera_vehicle(self) -> FloatArray:
+    def T_camera_vehicle(self) -> FloatArray:  # noqa: N802 (frame-naming convention, STYLE 6)
         """(4, 4) maps vehicle-frame points into the camera frame."""
         R = self.R_vehicle_camera
         T = np.eye(4)
@@ -268,7 +284,11 @@ class CameraModel:
             return p
         K = self.intrinsics.K
         out = cv2.undistortPoints(
-            p.reshape(-1, 1, 2), K, np.asarray(self.intrinsics.distortion), P=K
+            p.reshape(-1, 1, 2),
+            K,
+            np.asarray(self.intrinsics.distortion),
+            P=K,
+            criteria=UNDISTORT_CRITERIA,
         )
         return np.asarray(out, dtype=np.float64).reshape(-1, 2)
 
@@ -346,28 +366,30 @@ class CameraModel:
         return float(-(line[0] * u + line[2]) / line[1])
 
     def pitch_from_horizon_row(self, v_px: float) -> float:
-        """Pitch (rad) that puts the horizon at row `v_px` (roll = 0), paper 000 eq. 2 with v0 = cy."""
+        """Pitch (rad) that puts the horizon at row `v_px` (roll = 0), paper 000 eq. 2 with
+        v0 = cy."""
         i = self.intrinsics
         return math.atan2(i.cy_px - v_px, i.fy_px)
 
     # --- bird's-eye view ----------------------------------------------------------------
     @property
-    def H_image_ground(self) -> FloatArray:
+    def H_image_ground(self) -> FloatArray:  # noqa: N802 (frame-naming convention, STYLE 6)
         """(3, 3) map from road-plane (x_m, y_m, 1) to ideal image pixels (u, v, 1)."""
         T = self.T_camera_vehicle
         M = np.column_stack([T[:3, 0], T[:3, 1], T[:3, 3]])
         return self.intrinsics.K @ M
 
-    def H_image_grid(self, grid: BirdEyeGrid) -> FloatArray:
+    def H_image_grid(self, grid: BirdEyeGrid) -> FloatArray:  # noqa: N802
         """(3, 3) map from grid (col, row, 1) to ideal image pixels (u, v, 1)."""
         return self.H_image_ground @ np.linalg.inv(grid.T_grid_ground)
 
-    def H_grid_image(self, grid: BirdEyeGrid) -> FloatArray:
+    def H_grid_image(self, grid: BirdEyeGrid) -> FloatArray:  # noqa: N802
         """(3, 3) map from ideal image pixels (u, v, 1) to grid (col, row, 1)."""
-        return np.linalg.inv(self.H_image_grid(grid))
+        return np.asarray(np.linalg.inv(self.H_image_grid(grid)), dtype=np.float64)
 
     def grid_cells_visible(self, grid: BirdEyeGrid) -> npt.NDArray[np.bool_]:
-        """(rows, cols) bool: grid cells whose road point is in front of the camera and inside the image."""
+        """(rows, cols) bool: grid cells whose road point is in front of the camera and inside
+        the image."""
         rows, cols = grid.shape
         cc, rr = np.meshgrid(np.arange(cols, dtype=np.float64), np.arange(rows, dtype=np.float64))
         ground = grid.ground_from_cells(np.stack([cc.ravel(), rr.ravel()], axis=1))
@@ -384,14 +406,16 @@ class CameraModel:
             )
         return inside.reshape(rows, cols)
 
-    def warp_to_grid(self, image: npt.NDArray[np.uint8], grid: BirdEyeGrid) -> npt.NDArray[np.uint8]:
+    def warp_to_grid(
+        self, image: npt.NDArray[np.uint8], grid: BirdEyeGrid
+    ) -> npt.NDArray[np.uint8]:
         """(H, W) image -> (rows, cols) bird's-eye view, bilinear; cells outside the image are 0.
 
         Notes:
             Expects an undistorted image when the intrinsics carry distortion.
         """
         rows, cols = grid.shape
-        return cv2.warpPerspective(
+        warped = cv2.warpPerspective(
             image,
             self.H_grid_image(grid),
             (cols, rows),
@@ -399,11 +423,14 @@ class CameraModel:
             borderMode=cv2.BORDER_CONSTANT,
             borderValue=0,
         )
+        return np.asarray(warped, dtype=np.uint8)
 
-    def warp_from_grid(self, grid_image: npt.NDArray[np.uint8], grid: BirdEyeGrid) -> npt.NDArray[np.uint8]:
+    def warp_from_grid(
+        self, grid_image: npt.NDArray[np.uint8], grid: BirdEyeGrid
+    ) -> npt.NDArray[np.uint8]:
         """(rows, cols) grid image -> (H, W) image, nearest neighbour (for masks)."""
         i = self.intrinsics
-        return cv2.warpPerspective(
+        warped = cv2.warpPerspective(
             grid_image,
             self.H_image_grid(grid),
             (i.width_px, i.height_px),
@@ -411,3 +438,4 @@ class CameraModel:
             borderMode=cv2.BORDER_CONSTANT,
             borderValue=0,
         )
+        return np.asarray(warped, dtype=np.uint8)

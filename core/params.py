@@ -45,7 +45,8 @@ def _fraction(obj: object, *names: str) -> None:
 class PitchParams:
     """Vanishing-point pitch detector and horizon tracking (paper 000, II-A)."""
 
-    sobel_threshold: float = 60.0  # |vertical Sobel| above this is an edge (paper: "a given threshold")
+    # |vertical Sobel| above this is an edge (paper: "a given threshold")
+    sobel_threshold: float = 60.0
     min_cluster_px: int = 40  # paper 000: "40 pixels in the current setup"
     merge_angle_rad: float = 0.02  # paper 000: "a 0.02 radians threshold"
     lines_kept: int = 7  # paper 000: "only the 7 lines with the highest confidence"
@@ -57,7 +58,12 @@ class PitchParams:
         _positive(self, "sobel_threshold", "merge_angle_rad", "vp_region_px", "min_confidence")
         _check(self.min_cluster_px >= 2, "min_cluster_px", "an integer >= 2", self.min_cluster_px)
         _check(self.lines_kept >= 2, "lines_kept", "an integer >= 2", self.lines_kept)
-        _check(self.max_tracking_offset_px >= 0, "max_tracking_offset_px", ">= 0", self.max_tracking_offset_px)
+        _check(
+            self.max_tracking_offset_px >= 0,
+            "max_tracking_offset_px",
+            ">= 0",
+            self.max_tracking_offset_px,
+        )
 
 
 @dataclass(frozen=True)
@@ -75,8 +81,18 @@ class MotionStereoParams:
 
     def __post_init__(self) -> None:
         _positive(self, "x_max_m", "y_half_width_m", "cell_m", "threshold_xi")
-        _check(0 <= self.x_min_m < self.x_max_m, "x_min_m", f"0 <= x_min_m < x_max_m={self.x_max_m}", self.x_min_m)
-        _check(self.mean_window_px >= 1 and self.mean_window_px % 2 == 1, "mean_window_px", "an odd integer >= 1", self.mean_window_px)
+        _check(
+            0 <= self.x_min_m < self.x_max_m,
+            "x_min_m",
+            f"0 <= x_min_m < x_max_m={self.x_max_m}",
+            self.x_min_m,
+        )
+        _check(
+            self.mean_window_px >= 1 and self.mean_window_px % 2 == 1,
+            "mean_window_px",
+            "an odd integer >= 1",
+            self.mean_window_px,
+        )
         _fraction(self, "weight_obstacle", "weight_free")
 
 
@@ -86,21 +102,45 @@ class VehicleParams:
 
     search_width_m: float = 2.5  # paper 001: "the chosen interest area width is 2.5 meters"
     search_height_ratio: float = 0.5  # paper 001: "area height is ... half of its width"
-    search_bottom_fraction: float = 0.3  # paper 001: bottom at 30% of area height below the radar point
+    # paper 001: bottom at 30% of area height below the radar point
+    search_bottom_fraction: float = 0.3
     resampled_width_px: int = 64  # fixed size of the resampled area (paper: "a fixed size")
     max_half_width_px: int = 32  # largest symmetry half-width
     symmetry_threshold: float = 0.5  # chi over which a width is taken as the vehicle width
     refined_error_m: float = 0.40  # paper 001, III: "an error lower than 40 centimeters"
     min_width_m: float = 1.2  # world-size filter: narrowest vehicle
     max_width_m: float = 3.0  # world-size filter: widest vehicle
-    default_height_ratio: float = 0.8  # box height / width when the top is not found (paper 001, fig. 7.b)
+    # box height / width when the top is not found (paper 001, fig. 7.b)
+    default_height_ratio: float = 0.8
 
     def __post_init__(self) -> None:
-        _positive(self, "search_width_m", "search_height_ratio", "symmetry_threshold", "refined_error_m", "default_height_ratio")
+        _positive(
+            self,
+            "search_width_m",
+            "search_height_ratio",
+            "symmetry_threshold",
+            "refined_error_m",
+            "default_height_ratio",
+        )
         _fraction(self, "search_bottom_fraction")
-        _check(self.resampled_width_px >= 8, "resampled_width_px", "an integer >= 8", self.resampled_width_px)
-        _check(1 <= self.max_half_width_px <= self.resampled_width_px, "max_half_width_px", f"1..resampled_width_px={self.resampled_width_px}", self.max_half_width_px)
-        _check(0 < self.min_width_m < self.max_width_m, "min_width_m", f"0 < min_width_m < max_width_m={self.max_width_m}", self.min_width_m)
+        _check(
+            self.resampled_width_px >= 8,
+            "resampled_width_px",
+            "an integer >= 8",
+            self.resampled_width_px,
+        )
+        _check(
+            1 <= self.max_half_width_px <= self.resampled_width_px,
+            "max_half_width_px",
+            f"1..resampled_width_px={self.resampled_width_px}",
+            self.max_half_width_px,
+        )
+        _check(
+            0 < self.min_width_m < self.max_width_m,
+            "min_width_m",
+            f"0 < min_width_m < max_width_m={self.max_width_m}",
+            self.min_width_m,
+        )
 
 
 @dataclass(frozen=True)
@@ -134,9 +174,24 @@ class PedestrianParams:
 
     def __post_init__(self) -> None:
         _positive(self, "min_height_m", "min_distance_m", "aspect_min", "symmetry_threshold")
-        _check(self.max_height_m > self.min_height_m, "max_height_m", f"> min_height_m={self.min_height_m}", self.max_height_m)
-        _check(self.max_distance_m > self.min_distance_m, "max_distance_m", f"> min_distance_m={self.min_distance_m}", self.max_distance_m)
-        _check(self.aspect_max > self.aspect_min, "aspect_max", f"> aspect_min={self.aspect_min}", self.aspect_max)
+        _check(
+            self.max_height_m > self.min_height_m,
+            "max_height_m",
+            f"> min_height_m={self.min_height_m}",
+            self.max_height_m,
+        )
+        _check(
+            self.max_distance_m > self.min_distance_m,
+            "max_distance_m",
+            f"> min_distance_m={self.min_distance_m}",
+            self.max_distance_m,
+        )
+        _check(
+            self.aspect_max > self.aspect_min,
+            "aspect_max",
+            f"> aspect_min={self.aspect_min}",
+            self.aspect_max,
+        )
         _fraction(self, "min_obstacle_fraction")
 
 
@@ -150,7 +205,12 @@ class TrackingParams:
 
     def __post_init__(self) -> None:
         _check(self.confirm_frames >= 1, "confirm_frames", "an integer >= 1", self.confirm_frames)
-        _check(self.max_missed_frames >= 0, "max_missed_frames", "an integer >= 0", self.max_missed_frames)
+        _check(
+            self.max_missed_frames >= 0,
+            "max_missed_frames",
+            "an integer >= 0",
+            self.max_missed_frames,
+        )
         _positive(self, "gate_m")
 
 
@@ -172,10 +232,13 @@ class Params:
         parts = dotted.split(".")
         for part in parts[:-1]:
             if not isinstance(node.get(part), dict):
-                raise ParamsError(f"{dotted}: no such parameter group {part!r}")
+                groups = ", ".join(k for k, v in node.items() if isinstance(v, dict))
+                raise ParamsError(
+                    f"{dotted}: no such parameter group {part!r}; known here: {groups}"
+                )
             node = node[part]
         if parts[-1] not in node or isinstance(node[parts[-1]], dict):
-            raise ParamsError(f"{dotted}: no such parameter")
+            raise ParamsError(f"{dotted}: no such parameter; known here: {', '.join(node)}")
         node[parts[-1]] = value
         return from_dict(data)
 
@@ -203,7 +266,10 @@ def _coerce(path: str, tp: Any, raw: object) -> object:
         return raw
     if tp is float:
         _check(isinstance(raw, (int, float)) and not isinstance(raw, bool), path, "a number", raw)
-        return float(typing.cast(float, raw))
+        try:
+            return float(typing.cast(float, raw))
+        except OverflowError:
+            raise ParamsError(f"{path}: expected a number in float range, got {raw!r}") from None
     if tp is str:
         _check(isinstance(raw, str), path, "a string", raw)
         return raw
@@ -219,7 +285,7 @@ def _coerce(path: str, tp: Any, raw: object) -> object:
 def _build(cls: type[T], raw: dict[str, Any], prefix: str = "") -> T:
     hints = typing.get_type_hints(cls)
     fields = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
-    unknown = sorted(set(raw) - fields)
+    unknown = sorted(set(raw) - fields, key=str)
     if unknown:
         where = f"{prefix}." if prefix else ""
         raise ParamsError(
@@ -253,6 +319,8 @@ def load_params(path: Path | str) -> Params:
         raw = yaml.safe_load(p.read_text(encoding="utf-8"))
     except OSError as err:
         raise ParamsError(f"{p}: cannot read parameter file: {err.strerror}") from err
+    except UnicodeDecodeError as err:
+        raise ParamsError(f"{p}: not a UTF-8 text file: {err}") from err
     except yaml.YAMLError as err:
         raise ParamsError(f"{p}: not valid YAML: {err}") from err
     if raw is None:
@@ -260,7 +328,7 @@ def load_params(path: Path | str) -> Params:
     if not isinstance(raw, dict):
         raise ParamsError(f"{p}: expected a mapping of parameter groups, got {type(raw).__name__}")
     version = raw.pop("format_version", PARAMS_FORMAT_VERSION)
-    if version != PARAMS_FORMAT_VERSION:
+    if isinstance(version, bool) or version != PARAMS_FORMAT_VERSION:
         raise ParamsError(f"{p}: format_version: expected {PARAMS_FORMAT_VERSION}, got {version!r}")
     try:
         return from_dict(raw)
