@@ -1,0 +1,36 @@
+"""The `fusionscope` command refuses bad arguments with a message naming them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from core.cli import build_parser, main
+
+
+def test_serve_refuses_a_recordings_folder_that_does_not_exist(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    missing = tmp_path / "nowhere"
+    assert main(["serve", "--recordings", str(missing)]) == 2
+    assert f"--recordings {missing}: expected a folder of recordings" in capsys.readouterr().err
+
+
+def test_serve_refuses_a_recording_that_is_not_there(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["serve", "--recordings", str(tmp_path), "--recording", "nope"]) == 2
+    assert "nope" in capsys.readouterr().err
+
+
+def test_serve_defaults_to_loopback_port_8080_and_the_bundled_highway() -> None:
+    args = build_parser().parse_args(["serve"])
+    assert (args.host, args.port, args.recording) == ("127.0.0.1", 8080, "highway")
+    assert (Path(args.recordings) / "highway" / "recording.yaml").is_file()
+
+
+def test_a_subcommand_is_required(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        main([])
+    assert "serve" in capsys.readouterr().err
