@@ -12,6 +12,7 @@ its footprint (distance^2 / (fy * height)), so lane dashes do not flicker far aw
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -260,6 +261,43 @@ class _Projector:
             return None
         uv = (pc @ self.K.T)[:, :2] / pc[:, 2:3]
         return np.round(uv * (1 << SUBPIXEL_SHIFT)).astype(np.int32)
+
+
+def _clip_segment(
+    p0: FloatArray, p1: FloatArray, width: int, height: int
+) -> tuple[FloatArray, FloatArray] | None:
+    """Liang-Barsky clip of segment p0-p1 to the image's pixel area, or None when outside."""
+    lo, hi = np.array([-0.5, -0.5]), np.array([width - 0.5, height - 0.5])
+    d = p1 - p0
+    t0, t1 = 0.0, 1.0
+    for k in range(2):
+        for p, q in ((-d[k], p0[k] - lo[k]), (d[k], hi[k] - p0[k])):
+            if p == 0:
+                if q < 0:
+                    return None
+                continue
+            t = q / p
+            if p < 0:
+                t0 = max(t0, t)
+            else:
+                t1 = min(t1, t)
+    if t0 > t1:
+        return None
+    return p0 + t0 * d, p0 + t1 * d
+
+
+def _clip_polyline(uv: FloatArray, width: int, height: int) -> tuple[tuple[float, float], ...]:
+    """The part of an (N, 2) pixel polyline inside the image, cut at its border."""
+    out: list[tuple[float, float]] = []
+    for a, b in itertools.pairwise(uv):
+        clipped = _clip_segment(a, b, width, height)
+        if clipped is None:
+            continue
+        for q in clipped:
+            point = (float(q[0]), float(q[1]))
+            if not out or np.hypot(point[0] - out[-1][0], point[1] - out[-1][1]) > 1e-6:
+                out.append(point)
+    return tuple(out)
 
 
 def _face_points(
@@ -616,7 +654,7 @@ class Renderer:
         return [(_face_points(center, right, pts), grey) for pts, grey in design]
 
     def _rail_drawables(
-        self, pose: Pose, cam_xy: FloatArray
+        self, camera: CameraModel, pose: Pose, cam_xy: FloatArray
     ) -> tuple[list[_Drawable], list[TruthGuardRail], list[tuple[int, FloatArray]]]:
         """Beam pieces and posts as drawables, truth polylines, rail points for the radar."""
         drawables: list[_Drawable] = []
@@ -663,17 +701,14 @@ class Renderer:
                             ]
                         )
                         drawables.append(_Drawable(dist + 0.05, 0, [(post, 85.0)]))
-                uv, front = self.camera.project(np.column_stack([x, y, np.full_like(x, zm)]))
+                uv, front = camera.project(np.column_stack([x, y, np.full_like(x, zm)]))
                 keep = front & (x > 1.0) & (np.mod(np.arange(len(x)), RAIL_TRUTH_STEP) == 0)
                 keep[-1] = bool(front[-1] and x[-1] > 1.0)
-                if keep.sum() >= 2:
-                    truths.append(
-                        TruthGuardRail(
-                            rail.id * 100 + k,
-                            rail.side,
-                            tuple((float(u), float(v)) for u, v in uv[keep]),
-                        )
-                    )
+                visible = _clip_polyline(
+                    uv[keep], camera.intrinsics.width_px, camera.intrinsics.height_px
+                )
+                if len(visible) >= 2:
+                    truths.append(TruthGuardRail(rail.id * 100 + k, rail.side, visible))
                 for j in range(len(ss)):
                     radar_pts.append((rail.id, np.array([x[j], y[j]])))
         return drawables, truths, radar_pts
@@ -768,7 +803,7 @@ class Renderer:
                 (o.width_m, o.width_m, o.height_m),
                 self._velocity(None, t_s, pose),
             )
-        rail_drawables, rail_truth, rail_points = self._rail_drawables(pose, cam_xy)
+        rail_drawables, rail_truth, rail_points = self._rail_drawables(camera, pose, cam_xy)
         drawables += rail_drawables
 
         # Shadows on the ground first, then objects far to near.

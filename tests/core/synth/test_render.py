@@ -110,3 +110,20 @@ def test_pedestrians_have_a_human_aspect_ratio() -> None:
     for o in people:
         u0, v0, u1, v1 = o.box_px
         assert 0.2 < (u1 - u0) / (v1 - v0) < 0.75
+
+
+def test_guard_rail_truth_lies_inside_the_image_and_follows_the_frame_pitch() -> None:
+    rng = np.random.default_rng(11)
+    scene = SCENARIOS["highway"](6.0, rng)
+    renderer = Renderer(scene, CAMERA, rng)
+    level = renderer.render(2.0, CAMERA_PITCH_RAD, 1.0)[0]
+    pitched = renderer.render(2.0, CAMERA_PITCH_RAD + 0.01, 1.0)[0]  # looking further down
+    w, h = CAMERA.intrinsics.width_px, CAMERA.intrinsics.height_px
+    for rail in level.guard_rails:
+        pts = np.array(rail.polyline_px)
+        assert (pts[:, 0] >= -0.5).all() and (pts[:, 0] <= w - 0.5).all()
+        assert (pts[:, 1] >= -0.5).all() and (pts[:, 1] <= h - 0.5).all()
+    # the far end of each rail sits near the horizon, which rises when the camera pitches down
+    far_level = min(np.array(r.polyline_px)[:, 1].min() for r in level.guard_rails)
+    far_pitched = min(np.array(r.polyline_px)[:, 1].min() for r in pitched.guard_rails)
+    assert far_pitched < far_level - 3
