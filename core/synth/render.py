@@ -610,14 +610,14 @@ class Renderer:
         hl, hw = v.length_m / 2, v.width_m / 2
         faces: list[tuple[Polygon, float]] = []
         ends = []
-        # (centre, outward normal, half-width across, design, shade)
+        # (centre, outward normal, design, shade): rear, front, left side, right side
         specs = [
-            (c - hl * f, -f, hw, _rear_design(v), 0.95),
-            (c + hl * f, f, hw, _front_design(v), 0.95),
-            (c + hw * left, left, hl, _side_design(v), 0.85),
-            (c - hw * left, -left, hl, _side_design(v), 0.85),
+            (c - hl * f, -f, _rear_design(v), 0.95),
+            (c + hl * f, f, _front_design(v), 0.95),
+            (c + hw * left, left, _side_design(v), 0.85),
+            (c - hw * left, -left, _side_design(v), 0.85),
         ]
-        for k, (fc, n, _, design, shade) in enumerate(specs):
+        for k, (fc, n, design, shade) in enumerate(specs):
             if k < 2:
                 ends.append((fc, n))
             if float(np.dot(n, cam_xy - fc)) <= 0:

@@ -8,7 +8,7 @@ the renderer, the radar and the ground truth read the same numbers.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -156,7 +156,6 @@ class Scene:
     pitch_roughness_rad: float = 0.0087  # about 0.5 deg, paper 001 fig. 1
     pitch_per_decel_rad_per_mps2: float = 0.0035  # nose dips ~0.2 deg per m/s^2 of braking
     sun_shadow_offset_m: tuple[float, float] = (0.6, -0.4)  # shadow displacement (ds, dd)
-    extra: dict[str, float] = field(default_factory=dict)
 
     def illumination(self, t_s: float) -> float:
         kt, kg = zip(*self.illumination_keys, strict=True)
