@@ -343,7 +343,7 @@ class CameraModel:
         with np.errstate(divide="ignore", invalid="ignore"):
             t = (z - c[2]) / d[:, 2]
         ok = np.isfinite(t) & (t > 0) & (np.abs(d[:, 2]) > MIN_RAY_DESCENT)
-        out = c[None, :] + t[:, None] * d
+        out = c[None, :] + np.where(ok, t, 0.0)[:, None] * d
         out[~ok] = np.nan
         return out
 

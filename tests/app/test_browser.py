@@ -1,7 +1,7 @@
 """The inspector in headless Chromium: the camera image shows, stepping shows the next frame.
 
-Needs Debian's chromium at /usr/bin/chromium (never `playwright install`). Without it the
-tests skip, except when CI or REQUIRE_BROWSER is set, where they fail.
+Needs Debian's chromium at /usr/bin/chromium (Playwright's own browser download is never
+used). Without it the tests skip, except when CI or REQUIRE_BROWSER is set, where they fail.
 """
 
 from __future__ import annotations
