@@ -29,7 +29,6 @@ import can
 import cv2
 import numpy as np
 import numpy.typing as npt
-from rosbags.rosbag2 import StoragePlugin, Writer
 
 from core.io import radar_msgs
 from core.io.calibration import Calibration, save_calibration
@@ -44,6 +43,7 @@ from core.io.manifest import (
     Manifest,
     save_manifest,
 )
+from core.io.split_bag import SplitBagWriter
 
 CAMERA_TOPIC = "/camera/image/compressed"
 RADAR_TOPIC = "/radar/scan"
@@ -63,6 +63,8 @@ DBC_NAME = "vehicle.dbc"
 CALIBRATION_NAME = "calibration.yaml"
 GROUNDTRUTH_NAME = "groundtruth.json"
 BAG_VERSION: Literal[9] = 9
+# Bag files are split past this size (rosbag2's max_bagfile_size), keeping each file small.
+MAX_BAG_FILE_BYTES = 6 * 2**20
 
 SPEED_SIGNAL = SignalMapping("SPEED", "SPEED", "km/h", SPEED_UNITS_TO_MPS["km/h"])
 YAW_RATE_SIGNAL = SignalMapping("KINEMATICS", "YAW_RATE", "deg/s", YAW_RATE_UNITS_TO_RADPS["deg/s"])
@@ -103,14 +105,13 @@ class RecordingWriter:
 
         store = radar_msgs.typestore()
         self._store = store
-        self._bag = Writer(
-            self.out_dir / BAG_DIR, version=BAG_VERSION, storage_plugin=StoragePlugin.MCAP
+        self._bag = SplitBagWriter(
+            self.out_dir / BAG_DIR,
+            {CAMERA_TOPIC: radar_msgs.COMPRESSED_IMAGE, RADAR_TOPIC: radar_msgs.RADAR_SCAN},
+            store,
+            MAX_BAG_FILE_BYTES,
+            version=BAG_VERSION,
         )
-        self._bag.open()
-        self._camera = self._bag.add_connection(
-            CAMERA_TOPIC, radar_msgs.COMPRESSED_IMAGE, typestore=store
-        )
-        self._radar = self._bag.add_connection(RADAR_TOPIC, radar_msgs.RADAR_SCAN, typestore=store)
 
         shutil.copyfile(vehicle_dbc_path(), self.out_dir / DBC_NAME)
         db = load_dbc([self.out_dir / DBC_NAME])
@@ -155,7 +156,7 @@ class RecordingWriter:
             data=np.asarray(png, dtype=np.uint8).ravel(),
         )
         self._bag.write(
-            self._camera, int(t_ns), self._store.serialize_cdr(msg, radar_msgs.COMPRESSED_IMAGE)
+            CAMERA_TOPIC, int(t_ns), self._store.serialize_cdr(msg, radar_msgs.COMPRESSED_IMAGE)
         )
 
     def add_radar_scan(self, t_ns: int, targets: Sequence[RadarTarget]) -> None:
@@ -179,7 +180,7 @@ class RecordingWriter:
             header=self._header(t_ns, RADAR_FRAME_ID), returns=returns
         )
         self._bag.write(
-            self._radar, int(t_ns), self._store.serialize_cdr(msg, radar_msgs.RADAR_SCAN)
+            RADAR_TOPIC, int(t_ns), self._store.serialize_cdr(msg, radar_msgs.RADAR_SCAN)
         )
 
     def add_vehicle_state(self, t_ns: int, speed_mps: float, yaw_rate_radps: float) -> None:

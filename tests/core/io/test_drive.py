@@ -118,11 +118,27 @@ def test_same_inputs_give_identical_bytes(tmp_path: Path, recording: Path) -> No
     again = write_recording(tmp_path / "again")
     files = sorted(p.relative_to(recording) for p in recording.rglob("*") if p.is_file())
     assert [str(f) for f in files] == [
-        "bag/bag.mcap", "bag/metadata.yaml", "calibration.yaml", "groundtruth.json",
+        "bag/bag_0.mcap", "bag/metadata.yaml", "calibration.yaml", "groundtruth.json",
         "recording.yaml", "vehicle.blf", "vehicle.dbc",
     ]  # fmt: skip
     for f in files:
         assert (again / f).read_bytes() == (recording / f).read_bytes(), f
+
+
+def test_a_bag_split_over_several_files_reads_as_one(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    one_image_bytes = image(0).nbytes // 4  # a few messages per file
+    monkeypatch.setattr("core.io.writer.MAX_BAG_FILE_BYTES", one_image_bytes)
+    split = write_recording(tmp_path / "split")
+    files = sorted(p.name for p in (split / "bag").iterdir())
+    assert len(files) > 2 and files[-1] == "metadata.yaml"
+    assert all(f"bag_{k}.mcap" in files for k in range(len(files) - 1))
+    with Drive(split) as drive:
+        assert len(drive) == N_FRAMES
+        for i in reversed(range(N_FRAMES)):
+            np.testing.assert_array_equal(drive.frame(i).image, image(i))
+        assert drive.frame(2).radar_t_ns == 4 * RADAR_PERIOD_NS + RADAR_LAG_NS
 
 
 def test_writer_refuses_a_non_empty_folder(tmp_path: Path) -> None:
