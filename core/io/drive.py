@@ -26,7 +26,7 @@ from core.io.canlog import VehicleSignals, read_vehicle_signals
 from core.io.errors import RecordingError
 from core.io.frame import FrameInput, RadarTarget
 from core.io.groundtruth import FrameTruth, read_groundtruth
-from core.io.manifest import Manifest, load_manifest
+from core.io.manifest import Manifest, RadarCanSource, load_manifest
 
 DEFAULT_CACHE_FRAMES = 16
 
@@ -54,18 +54,20 @@ class Drive:
             )
             self.times_ns: npt.NDArray[np.int64] = self._camera.times_ns
             self.radar: RadarScans | None = None
+            if isinstance(m.radar, RadarCanSource):
+                raise RecordingError(f"{self.path}: radar over CAN is not read yet")
             if m.radar is not None:
                 bag = self._bag(m.radar.bag)
                 conn = bag.connection(m.radar.topic, RADAR_TYPES, "radar")
                 self.radar = bag.read_radar(conn, m.time_offsets.radar_ns)
             self.vehicle_signals = VehicleSignals.empty()
-            if m.can is not None:
+            if m.can is not None and m.can.bus.log is not None:
                 self.vehicle_signals = read_vehicle_signals(
-                    m.resolve(m.can.log),
-                    [m.resolve(d) for d in m.can.dbc],
+                    m.resolve(m.can.bus.log),
+                    [m.resolve(d) for d in m.can.bus.dbc],
                     m.can.speed,
                     m.can.yaw_rate,
-                    channel=m.can.channel,
+                    channel=m.can.bus.channel,
                     offset_ns=m.time_offsets.can_ns,
                 )
             self._truth: dict[int, FrameTruth] = {}

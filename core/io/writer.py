@@ -39,6 +39,7 @@ from core.io.groundtruth import FrameTruth, write_groundtruth
 from core.io.manifest import (
     MANIFEST_NAME,
     BagStream,
+    CanBus,
     CanSource,
     Manifest,
     save_manifest,
@@ -244,7 +245,7 @@ class RecordingWriter:
             generator=self.generator,
             camera=BagStream(BAG_DIR, CAMERA_TOPIC),
             radar=BagStream(BAG_DIR, RADAR_TOPIC),
-            can=CanSource(CAN_LOG, (DBC_NAME,), SPEED_SIGNAL, YAW_RATE_SIGNAL),
+            can=CanSource(CanBus(dbc=(DBC_NAME,), log=CAN_LOG), SPEED_SIGNAL, YAW_RATE_SIGNAL),
             calibration=CALIBRATION_NAME,
             groundtruth=GROUNDTRUTH_NAME if self._truth is not None else None,
         )
