@@ -1,6 +1,5 @@
 """Recordings: the folder format, its writer and its reader (see manifest.py for the layout)."""
 
-from core.io.bag import RadarScans
 from core.io.calibration import Calibration, RadarMount, load_calibration, save_calibration
 from core.io.canlog import SignalMapping, VehicleSignals, read_vehicle_signals
 from core.io.drive import Drive
@@ -14,6 +13,7 @@ from core.io.groundtruth import (
     write_groundtruth,
 )
 from core.io.manifest import BagStream, CanSource, Manifest, TimeOffsets, load_manifest
+from core.io.radarscans import RadarScans
 from core.io.writer import RecordingWriter
 
 __all__ = [

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +25,7 @@ from rosbags.interfaces import Connection
 
 from core.io import radar_msgs
 from core.io.errors import RecordingError
+from core.io.radarscans import RadarScans
 
 Int64Array = npt.NDArray[np.int64]
 FloatArray = npt.NDArray[np.float64]
@@ -35,31 +35,6 @@ RADAR_TYPES = (radar_msgs.RADAR_SCAN, radar_msgs.RADAR_TRACKS)
 
 # Raw sensor_msgs/Image encodings we convert to grey, with their channel count.
 RAW_ENCODINGS = {"mono8": 1, "8uc1": 1, "bgr8": 3, "rgb8": 3, "bgra8": 4, "rgba8": 4}
-
-
-@dataclass(frozen=True, eq=False)
-class RadarScans:
-    """All radar messages of a topic, one row per return, grouped by scan.
-
-    t_ns: (S,) int64 scan time stamps, ascending; start: (S + 1,) int64, returns of scan k
-    are rows start[k]:start[k + 1]; range_m, azimuth_rad (positive left), range_rate_mps
-    (positive receding), amplitude: (R,) float64; track_id: (R,) int64, -1 for scan returns.
-    """
-
-    t_ns: Int64Array
-    start: Int64Array
-    range_m: FloatArray
-    azimuth_rad: FloatArray
-    range_rate_mps: FloatArray
-    amplitude: FloatArray
-    track_id: Int64Array
-
-    @property
-    def median_period_ns(self) -> float:
-        """Median time between scans (ns); inf with fewer than two scans."""
-        if len(self.t_ns) < 2:
-            return math.inf
-        return float(np.median(np.diff(self.t_ns)))
 
 
 def _stamp(msg: Any) -> str:

@@ -20,13 +20,14 @@ import numpy as np
 import numpy.typing as npt
 
 from core.camera import CameraModel
-from core.io.bag import RADAR_TYPES, BagReader, CameraStream, RadarScans
+from core.io.bag import RADAR_TYPES, BagReader, CameraStream
 from core.io.calibration import Calibration, load_calibration
 from core.io.canlog import VehicleSignals, read_vehicle_signals
 from core.io.errors import RecordingError
 from core.io.frame import FrameInput, RadarTarget
 from core.io.groundtruth import FrameTruth, read_groundtruth
 from core.io.manifest import Manifest, RadarCanSource, load_manifest
+from core.io.radarscans import RadarScans
 
 DEFAULT_CACHE_FRAMES = 16
 
