@@ -193,6 +193,11 @@ def _stamps(t_ns: Sequence[int] | Int64Array) -> str:
     return shown + (", …" if len(t_ns) > WARN_STAMPS else "")
 
 
+def _next_message(last_ns: int | None) -> str:
+    """The message after the one at `last_ns` (None: before any), in words."""
+    return "the first message" if last_ns is None else f"the message after log t={last_ns} ns"
+
+
 def _reason(err: BaseException) -> str:
     return f"{err} ({type(err).__name__})"
 
@@ -378,15 +383,14 @@ class BagReader:
             for _, t_ns, raw in self._reader.messages(stream or [conn], start, stop):
                 if not 0 <= t_ns <= INT64_MAX:
                     raise RecordingError(
-                        f"{self.path}: {conn.topic}: message after log t={last} ns has log time "
-                        f"{t_ns} ns; expected 0 to {INT64_MAX}"
+                        f"{self.path}: {conn.topic}: {_next_message(last)} has log time {t_ns} "
+                        f"ns; expected 0 to {INT64_MAX}"
                     )
                 last = t_ns
                 yield t_ns, raw
         except BAG_ERRORS as err:
-            place = "the first message" if last is None else f"the message at log t={last} ns"
             raise RecordingError(
-                f"{self.path}: {conn.topic}: cannot read the bag after {place}: {_reason(err)}"
+                f"{self.path}: {conn.topic}: cannot read {_next_message(last)}: {_reason(err)}"
             ) from err
 
     def _deserialize(self, raw: bytes, conn: Connection, t_ns: int) -> Any:

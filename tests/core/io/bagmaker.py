@@ -112,11 +112,13 @@ def build(store: Typestore, msgtype: str, fields: dict[str, Any]) -> Any:
     )
 
 
-def serialize(kind: Kind, msgtype: str, fields: dict[str, Any] | bytes) -> bytes:
+def serialize(
+    kind: Kind, msgtype: str, fields: dict[str, Any] | bytes, store: Typestore | None = None
+) -> bytes:
     """The message as a bag of `kind` stores it (bytes pass through)."""
     if isinstance(fields, bytes):
         return fields
-    store = typestore(kind)
+    store = store or typestore(kind)
     msg = build(store, msgtype, fields)
     if kind == "ros1":
         return bytes(store.serialize_ros1(msg, msgtype))
@@ -202,16 +204,19 @@ def can_frame(
 
 
 # --- bags --------------------------------------------------------------------------------
-def write_bag(path: Path, kind: Kind, messages: Sequence[Message]) -> Path:
+def write_bag(
+    path: Path, kind: Kind, messages: Sequence[Message], store: Typestore | None = None
+) -> Path:
     """Write `messages` into a new bag of `kind` at `path` (ROS 1: a .bag file); returns path.
 
-    One connection per (topic, message type), in order of first appearance.
+    One connection per (topic, message type), in order of first appearance. `store` defines
+    the message types (default: `typestore(kind)`).
     """
     if kind not in KINDS:
         raise ValueError(f"kind: expected one of {KINDS}, got {kind!r}")
     if (kind == "ros1") != (path.suffix == ".bag"):
         raise ValueError(f"path: a ROS 1 bag and only it ends in .bag, got {path} for {kind}")
-    store = typestore(kind)
+    store = store or typestore(kind)
     streams = list(dict.fromkeys((topic, msgtype) for topic, msgtype, _, _ in messages))
     writer: rosbag1.Writer | rosbag2.Writer
     if kind == "ros1":
@@ -224,7 +229,7 @@ def write_bag(path: Path, kind: Kind, messages: Sequence[Message]) -> Path:
             for stream in streams
         }
         for topic, msgtype, t_ns, fields in messages:
-            writer.write(conns[topic, msgtype], t_ns, serialize(kind, msgtype, fields))
+            writer.write(conns[topic, msgtype], t_ns, serialize(kind, msgtype, fields, store))
     return path
 
 
