@@ -17,6 +17,7 @@ import base64
 import difflib
 import gzip
 import math
+import re
 import string
 import struct
 import warnings
@@ -344,11 +345,16 @@ class _Candump:
         return _frame(float(stamp[1:-1]), can_id, extended, bytes.fromhex(data_text), channel)
 
 
+_ASC_ID = re.compile(r"[0-9A-Fa-f]+[xX]?\Z")
+
+
 class _Asc:
     """Vector ASC: `0.012300 1  0B4  Rx   d 8 00 00 00 00 00 1D 0B 7A` and CANFD lines.
 
     Header lines (date, base, internal events, Begin/End Triggerblock), comments and events
-    (a time stamp followed by anything but a frame: statistics, chip status) are no frames.
+    (a time stamp and a channel followed by a word that is no CAN id: Statistic:, ErrorFrame,
+    J1939TP; and CANoe's TxRq transmit requests) are no frames. A line of time stamp,
+    channel and CAN id is a frame and must parse as one.
     """
 
     name = "ASC"
@@ -376,9 +382,13 @@ class _Asc:
             raise ValueError("expected a channel and an event after the time stamp")
         if parts[1].upper() == "CANFD":
             return self._fd(t_s, parts)
-        if not parts[1].isdigit() or len(parts) < 4 or parts[3] not in ("Rx", "Tx"):
+        if not parts[1].isdigit() or not _ASC_ID.match(parts[2]):
             return None  # ErrorFrame, statistics, chip status, other events
         can_id, extended = self._id(parts[2])
+        if _at(parts, 3) == "TxRq":
+            return None
+        if _at(parts, 3) not in ("Rx", "Tx"):
+            raise ValueError(f"direction {_at(parts, 3)!r}: expected Rx or Tx")
         if len(parts) < 6:
             raise ValueError("expected 'd <dlc> <data>' after the direction")
         if parts[4] in ("r", "R"):
@@ -580,6 +590,14 @@ def _blf_frames(path: Path, gz: bool, warn: Warn) -> Iterator[CanFrame]:
         if n_frames == 0:
             raise RecordingError(f"{path}: not a readable BLF file: {err}") from err
         warn(f"{path}: BLF read failed after {n_frames} frames: {err}; the rest is lost")
+    else:
+        # python-can ends a file cut short without a word; its header knows the full size.
+        size = path.stat().st_size
+        if not gz and reader.file_size > size:
+            warn(
+                f"{path}: the BLF header gives {reader.file_size} bytes, the file has {size}: "
+                f"it was cut short; kept the {n_frames} frames before the cut"
+            )
     finally:
         reader.stop()
     if n_bad:
