@@ -19,6 +19,7 @@ from core.io.canlog import (
     YAW_RATE_UNITS_TO_RADPS,
     SignalMapping,
     VehicleSignalDecoder,
+    VehicleSignals,
     decode_frames,
     iter_log_frames,
     load_dbc,
@@ -85,7 +86,9 @@ def _yaw(db: Database, t_s: float, degps: float, channel: str | None = "can0") -
     return CanFrame(round(t_s * NS), 0x24, False, data, channel)
 
 
-def _decode(decoder: VehicleSignalDecoder, frames: list[CanFrame]) -> tuple[object, list[str]]:
+def _decode(
+    decoder: VehicleSignalDecoder, frames: list[CanFrame]
+) -> tuple[VehicleSignals, list[str]]:
     warnings: list[str] = []
     decode_frames(frames, [decoder])
     return decoder.result(warnings.append), warnings
