@@ -61,6 +61,13 @@ BAG_ERRORS: tuple[type[BaseException], ...] = (
     OSError,  # a path that is missing, unreadable, or a folder without metadata.yaml
     struct.error,  # a record shorter than its fixed fields
     apsw.Error,  # a damaged sqlite3 database page, met while reading messages
+    ValueError,  # UnicodeDecodeError of a name, type or metadata.yaml; a bad ROS 1 record type
+    AssertionError,  # rosbag1 asserts on index records and message times
+    KeyError,  # a connection id or definition encoding that the bag does not define
+    TypeError,  # a damaged QoS profile (YAML of the wrong shape); ord() at the end of a file
+    AttributeError,  # ... a QoS enum given as a list
+    MemoryError,  # an MCAP record whose length field says terabytes (read() allocates it)
+    OverflowError,  # ... or more than an index can hold
 )
 
 # Raw sensor_msgs/Image encodings read here: channels, bytes per channel, cv2 code to grey.
@@ -305,6 +312,13 @@ class BagReader:
                 f"bag folder with metadata.yaml, or a .db3 or .mcap file): {_reason(err)}"
             ) from err
         self._open = True
+        for c in self._reader.connections:
+            if not (isinstance(c.topic, str) and isinstance(c.msgtype, str)):
+                self.close()
+                raise RecordingError(
+                    f"{self.path}: connection {c.id} has topic {c.topic!r} of type {c.msgtype!r}; "
+                    "expected a topic name and a message type name"
+                )
 
     def close(self) -> None:
         if self._open:
@@ -381,10 +395,16 @@ class BagReader:
         last: int | None = None
         try:
             for _, t_ns, raw in self._reader.messages(stream or [conn], start, stop):
-                if not 0 <= t_ns <= INT64_MAX:
+                # sqlite3 columns hold whatever a damaged page says
+                if not (isinstance(t_ns, int) and 0 <= t_ns <= INT64_MAX):
                     raise RecordingError(
-                        f"{self.path}: {conn.topic}: {_next_message(last)} has log time {t_ns} "
-                        f"ns; expected 0 to {INT64_MAX}"
+                        f"{self.path}: {conn.topic}: {_next_message(last)} has log time "
+                        f"{t_ns!r} ns; expected an integer from 0 to {INT64_MAX}"
+                    )
+                if not isinstance(raw, bytes | memoryview):
+                    raise RecordingError(
+                        f"{self.path}: {conn.topic}: message at log t={t_ns} ns has data of "
+                        f"type {type(raw).__name__}; expected bytes"
                     )
                 last = t_ns
                 yield t_ns, raw
