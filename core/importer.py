@@ -198,7 +198,7 @@ def _build_calibration(
 ) -> _BuiltCalibration:
     """The calibration of the output images (`out_size`) from `spec` about the source images.
 
-    what: names the source in messages ("the video", "the bag's images").
+    what: the source and its verb, for messages ("the video is", "the bag's images are").
     """
     (sw, sh), (ow, oh) = source_size, out_size
     notes: list[str] = []
@@ -210,11 +210,11 @@ def _build_calibration(
             if (sw, sh) == (ow, oh) or abs(ratio - 1.0) > ASPECT_TOLERANCE:
                 raise ValueError(
                     f"--camera-info {intr.path}: calibrated at {info.width_px}x{info.height_px}, "
-                    f"but {what} is {sw}x{sh}; give a camera_info (or --fx/--fy/--cx/--cy) "
+                    f"but {what} {sw}x{sh}; give a camera_info (or --fx/--fy/--cx/--cy) "
                     f"at {sw}x{sh}"
                 )
             notes.append(
-                f"{intr.path} is for {info.width_px}x{info.height_px}, {what} {sw}x{sh}: "
+                f"{intr.path} is for {info.width_px}x{info.height_px}, but {what} {sw}x{sh}: "
                 "taken as the same sensor at another resolution"
             )
         intrinsics = scale_intrinsics(info, ow, oh)
@@ -818,6 +818,54 @@ def _name(options: ImportOptions, source: Path) -> str:
     return options.name if options.name is not None else source.stem.split(".")[0] or "import"
 
 
+def _output_ns(sampling: VideoSampling, k: int) -> int:
+    """Output time k (ns) on the video's clock; each rounded on its own, so no drift builds up."""
+    return round(sampling.from_s * NS_PER_S) + round(k * NS_PER_S / sampling.fps)
+
+
+def _planned_count(v: _Video, sampling: VideoSampling) -> int:
+    """How many output frames the clip gives, from the container's frame count (0: unknown)."""
+    if v.frame_count is None:
+        return 0
+    end_s = (v.frame_count - 1) / v.fps
+    end_ns = round((end_s if sampling.to_s is None else min(end_s, sampling.to_s)) * NS_PER_S)
+    count = 0
+    while _output_ns(sampling, count) <= end_ns:
+        count += 1
+    return count
+
+
+def _sampled_frames(
+    v: _Video, sampling: VideoSampling, out_size: tuple[int, int], where: Path
+) -> Iterator[tuple[int, GreyImage]]:
+    """(output time on the video's clock (ns), grey resized image) per output frame.
+
+    Output time k takes source frame round(t_k * fps); source frames are grabbed in order and
+    only the wanted ones decoded. Ends at --to-s or past the last source frame.
+    """
+    to_ns = None if sampling.to_s is None else round(sampling.to_s * NS_PER_S)
+    grabbed = -1  # index of the last source frame grabbed
+    image: GreyImage | None = None
+    k = 0
+    while True:
+        t_ns = _output_ns(sampling, k)
+        if to_ns is not None and t_ns > to_ns:
+            return
+        wanted = math.floor(t_ns * v.fps / NS_PER_S + 0.5)
+        if wanted > grabbed:
+            while grabbed < wanted and v.capture.grab():
+                grabbed += 1
+            if grabbed < wanted:
+                return  # past the end
+            ok, frame = v.capture.retrieve()
+            if not ok or frame is None:
+                raise RecordingError(f"{where}: frame {grabbed} cannot be decoded")
+            image = to_grey(frame, out_size)
+        assert image is not None  # wanted >= 0 = the first grab
+        yield t_ns, image
+        k += 1
+
+
 def import_video(
     video: Path,
     out_dir: Path,
@@ -838,44 +886,20 @@ def import_video(
     notes.extend(prepared.notes if prepared is not None else ())
     v = _open_video(video)
     try:
-        out_size = output_size(sampling.width_px, (v.width_px, v.height_px))
+        source_size = (v.width_px, v.height_px)
+        out_size = output_size(sampling.width_px, source_size)
         has_radar = prepared is not None and prepared.radar is not None
-        built = _build_calibration(
-            calibration, (v.width_px, v.height_px), out_size, has_radar, "the video"
-        )
+        built = _build_calibration(calibration, source_size, out_size, has_radar, "the video is")
         notes.extend(built.notes)
-        period_ns = round(NS_PER_S / sampling.fps)
-        from_ns = round(sampling.from_s * NS_PER_S)
-        to_ns = None if sampling.to_s is None else round(sampling.to_s * NS_PER_S)
-        total = 0
-        if v.frame_count is not None:
-            end_ns = round((v.frame_count - 1) / v.fps * NS_PER_S)
-            end_ns = end_ns if to_ns is None else min(end_ns, to_ns)
-            total = max(0, (end_ns - from_ns) // period_ns + 1)
-        if prepared is not None and prepared.span_ns is not None:
-            planned = [sampling.start_ns + from_ns + k * period_ns for k in range(max(total, 1))]
+        total = _planned_count(v, sampling)
+        if prepared is not None:
+            planned = [sampling.start_ns + _output_ns(sampling, k) for k in range(max(total, 1))]
             what = f"{video}: the video's frames (--video-start-s)"
             notes.extend(_check_can_times(prepared, planned, what, options.max_radar_skew_ms))
         with _staging(out_dir) as tmp:
             bag = _camera_bag(tmp)
             stamps: list[int] = []
-            grabbed = -1  # index of the last source frame grabbed
-            image: GreyImage | None = None
-            while True:
-                t_ns = from_ns + len(stamps) * period_ns
-                if to_ns is not None and t_ns > to_ns:
-                    break
-                wanted = math.floor(t_ns * v.fps / NS_PER_S + 0.5)
-                if wanted > grabbed:
-                    while grabbed < wanted and v.capture.grab():
-                        grabbed += 1
-                    if grabbed < wanted:
-                        break  # past the end
-                    ok, frame = v.capture.retrieve()
-                    if not ok or frame is None:
-                        raise RecordingError(f"{video}: frame {grabbed} cannot be decoded")
-                    image = to_grey(frame, out_size)
-                assert image is not None
+            for t_ns, image in _sampled_frames(v, sampling, out_size, video):
                 stamp = sampling.start_ns + t_ns
                 bag.write(
                     CAMERA_TOPIC, stamp, png_image_message(radar_msgs.typestore(), stamp, image)
@@ -892,19 +916,19 @@ def import_video(
                 raise RecordingError(
                     f"{video}: no frames between --from-s {sampling.from_s:g} and {end}{lasts}"
                 )
-            if progress is not None and len(stamps) != total:
+            if progress is not None and len(stamps) < total:
                 progress(len(stamps), len(stamps))
             clip_end_s = (stamps[-1] - sampling.start_ns) / NS_PER_S
-            description = (
+            description = _join(
                 f"Imported by `fusionscope import video` from {video.name} ({v.width_px}x"
                 f"{v.height_px}, {v.fps:g} fps): grey, resized to {out_size[0]}x{out_size[1]}, "
                 f"resampled to {sampling.fps:g} fps (the source frame nearest each output time), "
                 f"video time {sampling.from_s:g}-{clip_end_s:g} s; stamps are the output times "
-                f"plus {sampling.start_ns} ns. {built.description} "
-                + " ".join(
-                    t for t in (prepared.description if prepared else "", assumption_text) if t
-                )
-            ).strip()
+                f"plus {sampling.start_ns} ns.",
+                built.description,
+                prepared.description if prepared is not None else "",
+                assumption_text,
+            )
             manifest = _finish(
                 tmp,
                 name=_name(options, video),
@@ -969,7 +993,7 @@ def import_still(
     source_size = (frame.shape[1], frame.shape[0])
     out_size = output_size(width_px, source_size)
     has_radar = prepared is not None and prepared.radar is not None
-    built = _build_calibration(calibration, source_size, out_size, has_radar, "the image")
+    built = _build_calibration(calibration, source_size, out_size, has_radar, "the image is")
     notes.extend(built.notes)
     if prepared is not None:
         what = f"--time-s {t_ns / NS_PER_S:.3f}"
@@ -1075,7 +1099,7 @@ def import_bag(
     )
     if prepared is not None and prepared.radar is not None:
         radar = prepared.radar
-    built = _build_calibration(calibration, size, size, radar is not None, "the bag's images")
+    built = _build_calibration(calibration, size, size, radar is not None, "the bag's images are")
     notes.extend(built.notes)
     if prepared is not None:
         what = f"{bag_path}: the camera's stamps"
