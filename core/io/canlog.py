@@ -557,6 +557,28 @@ TEXT_FORMATS: dict[str, Callable[[], _LineParser]] = {
 LOG_SUFFIXES = (".blf", *TEXT_FORMATS)
 
 
+BLF_OBJECT_HEADER_BYTES = 16  # "LOBJ", header size, header version, object size, type
+
+
+class _CheckedBLFReader(can.BLFReader):
+    """python-can's BLFReader, refusing objects too small to move past.
+
+    python-can 4.6 reads an object of size 0 inside a container again and again, forever
+    (hardbyte/python-can#1584, #1581, open): a corrupted BLF would hang the app. Each
+    container's chain of objects is walked first, as python-can walks it, and one shorter
+    than its own header raises BLFParseError.
+    """
+
+    def _parse_data(self, data: bytes) -> Iterator[can.Message]:
+        pos = 0
+        while (found := data.find(b"LOBJ", pos, pos + 8)) >= 0 and found + 12 <= len(data):
+            size = int.from_bytes(data[found + 8 : found + 12], "little")
+            if size < BLF_OBJECT_HEADER_BYTES:
+                raise BLFParseError(f"an object of {size} bytes in a container")
+            pos = found + size
+        return super()._parse_data(data)
+
+
 def _blf_frames(path: Path, gz: bool, warn: Warn) -> Iterator[CanFrame]:
     errors = (BLFParseError, struct.error, zlib.error, ValueError, OSError, EOFError)
     try:
@@ -564,7 +586,7 @@ def _blf_frames(path: Path, gz: bool, warn: Warn) -> Iterator[CanFrame]:
     except OSError as err:
         raise RecordingError(f"{path}: cannot open: {err}") from err
     try:
-        reader = can.BLFReader(stream)
+        reader = _CheckedBLFReader(stream)
     except errors as err:
         stream.close()
         raise RecordingError(f"{path}: not a readable BLF file: {err}") from err

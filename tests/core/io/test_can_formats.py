@@ -9,11 +9,16 @@ from __future__ import annotations
 
 import gzip
 import shutil
+import signal
+import struct
+import zlib
 from collections.abc import Callable
 from pathlib import Path
+from types import FrameType
 
 import can
 import pytest
+from can.io import blf
 from can.io.trc import TRCFileVersion
 
 from core.io.canframe import CanFrame
@@ -364,3 +369,32 @@ def test_unsupported_trc_version_and_missing_columns_raise(tmp_path: Path) -> No
         _excerpt(tmp_path, "v20.trc", ";$FILEVERSION=2.0\n 1 1.0 DT 0100 Rx 1 00\n")
     with pytest.raises(RecordingError, match=r"st\.trc: line 2: \$STARTTIME 'soon'"):
         _excerpt(tmp_path, "st.trc", ";$FILEVERSION=2.1\n;$STARTTIME=soon\n")
+
+
+def test_blf_object_of_size_zero_raises_instead_of_looping_forever(tmp_path: Path) -> None:
+    """python-can 4.6 alone yields the same frame forever here (hardbyte/python-can#1584)."""
+    ok = tmp_path / "ok.blf"
+    _write(ok, ".blf", DATA[:2])
+    data = ok.read_bytes()
+    start = blf.FILE_HEADER_SIZE
+    size = blf.OBJ_HEADER_BASE_STRUCT.unpack_from(data, start)[3]
+    container = data[start + blf.OBJ_HEADER_BASE_STRUCT.size : start + size]
+    inner = bytearray(zlib.decompress(container[blf.LOG_CONTAINER_STRUCT.size :]))
+    assert inner[:4] == b"LOBJ"
+    struct.pack_into("<L", inner, 8, 0)  # the first frame's object size
+    body = blf.LOG_CONTAINER_STRUCT.pack(blf.NO_COMPRESSION, len(inner)) + inner
+    obj = blf.OBJ_HEADER_BASE_STRUCT.pack(b"LOBJ", 16, 1, 16 + len(body), blf.LOG_CONTAINER)
+    path = tmp_path / "zero.blf"
+    path.write_bytes(data[:start] + obj + body)
+
+    def hang(signum: int, frame: FrameType | None) -> None:
+        pytest.fail("iter_log_frames loops forever on a BLF object of size 0")
+
+    previous = signal.signal(signal.SIGALRM, hang)
+    signal.alarm(10)
+    try:
+        with pytest.raises(RecordingError, match=r"zero\.blf: not a readable BLF file: an object"):
+            _read(path)
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
