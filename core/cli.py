@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import textwrap
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -83,6 +84,11 @@ def _non_negative_int(text: str) -> int:
 
 def _s_to_ns(seconds: float) -> int:
     return round(seconds * 1_000_000_000)
+
+
+def _paragraph(text: str) -> str:
+    """Help text wrapped for a parser whose epilog keeps its own line breaks."""
+    return textwrap.fill(text, width=79, break_on_hyphens=False)
 
 
 class _UsageError(Exception):
@@ -340,6 +346,7 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 def _image_size_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--width",
+        metavar="PX",
         type=_positive_int,
         default=640,
         help="output width in px; the height follows the aspect ratio (default: 640, paper 001)",
@@ -355,7 +362,9 @@ def _can_args(p: argparse.ArgumentParser, from_bag: bool) -> None:
         + ("; without it, the bag's can_msgs/Frame topic" if from_bag else ""),
     )
     if from_bag:
-        g.add_argument("--can-topic", help="the bag's CAN topic (default: the only one)")
+        g.add_argument(
+            "--can-topic", metavar="TOPIC", help="the bag's CAN topic (default: the only one)"
+        )
     g.add_argument(
         "--dbc", action="append", help="DBC file decoding the CAN frames; repeat for several"
     )
@@ -363,7 +372,7 @@ def _can_args(p: argparse.ArgumentParser, from_bag: bool) -> None:
         "--mapping",
         metavar="MAPPING.yaml",
         help="which DBC signals are speed, yaw rate and radar fields: `can:` and/or `radar:` "
-        "sections as in recording.yaml, without log/dbc (see core/importer.py)",
+        "sections as in recording.yaml, without log/dbc (example below)",
     )
 
 
@@ -372,43 +381,63 @@ def _common_import_args(p: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--camera-info", metavar="FILE", help="ROS camera_info YAML (as calibrate writes)"
     )
-    g.add_argument("--hfov-deg", type=_positive, help="horizontal field of view: centred pinhole")
-    g.add_argument("--fx", type=_positive, help="focal length (px) at the source's size")
-    g.add_argument("--fy", type=_positive, help="with --fx (default: --fx)")
-    g.add_argument("--cx", type=_finite, help="with --fx (default: the image centre)")
-    g.add_argument("--cy", type=_finite, help="with --fx (default: the image centre)")
+    g.add_argument(
+        "--hfov-deg",
+        metavar="DEG",
+        type=_positive,
+        help="horizontal field of view: centred pinhole",
+    )
+    g.add_argument(
+        "--fx", metavar="PX", type=_positive, help="focal length (px) at the source's size"
+    )
+    g.add_argument("--fy", metavar="PX", type=_positive, help="with --fx (default: --fx)")
+    g.add_argument("--cx", metavar="PX", type=_finite, help="with --fx (default: the image centre)")
+    g.add_argument("--cy", metavar="PX", type=_finite, help="with --fx (default: the image centre)")
     m = p.add_argument_group("mounting (vehicle frame: x forward, y left, z up)")
     m.add_argument(
         "--camera-height-m",
+        metavar="M",
         type=_positive,
         default=1.2,
         help="camera above the road (default: 1.2)",
     )
     m.add_argument(
         "--camera-x-m",
+        metavar="M",
         type=_finite,
         default=1.5,
         help="camera ahead of the reference point (default: 1.5)",
     )
-    m.add_argument("--pitch-rad", type=_finite, default=0.0, help="camera pitch, down positive")
-    m.add_argument("--radar-x-m", type=_finite, help="radar ahead of the reference point")
-    m.add_argument("--radar-y-m", type=_finite, help="radar to the left (default: 0)")
-    m.add_argument("--radar-z-m", type=_finite, help="radar above the road (default: 0)")
-    m.add_argument("--radar-yaw-rad", type=_finite, help="radar yaw, left positive (default: 0)")
+    m.add_argument(
+        "--pitch-rad", metavar="RAD", type=_finite, default=0.0, help="camera pitch, down positive"
+    )
+    m.add_argument(
+        "--radar-x-m", metavar="M", type=_finite, help="radar ahead of the reference point"
+    )
+    m.add_argument("--radar-y-m", metavar="M", type=_finite, help="radar to the left (default: 0)")
+    m.add_argument(
+        "--radar-z-m", metavar="M", type=_finite, help="radar above the road (default: 0)"
+    )
+    m.add_argument(
+        "--radar-yaw-rad", metavar="RAD", type=_finite, help="radar yaw, left positive (default: 0)"
+    )
     a = p.add_argument_group("where nothing is recorded")
     a.add_argument(
         "--assume-speed-mps",
+        metavar="MPS",
         type=_non_negative,
         help="constant speed written to the manifest (without it and without CAN speed, "
         "speed is NaN and motion stereo cannot work)",
     )
     a.add_argument(
         "--assume-yaw-rate-radps",
+        metavar="RADPS",
         type=_finite,
         help="constant yaw rate, left positive (default: 0 when a speed is assumed)",
     )
     p.add_argument(
         "--max-radar-skew-ms",
+        metavar="MS",
         type=_positive,
         help="pair a radar scan with a camera frame up to this far apart (default: half the "
         "radar's period)",
@@ -417,6 +446,7 @@ def _common_import_args(p: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from core.importer import MAPPING_EXAMPLE
     from core.synth.scenarios import SCENARIOS
 
     parser = argparse.ArgumentParser(
@@ -449,15 +479,27 @@ def build_parser() -> argparse.ArgumentParser:
             "where the board is not found, or of another size than most, are listed and skipped."
         ),
     )
-    calibrate.add_argument("folder", help="folder of chessboard images (png, jpg, ...)")
     calibrate.add_argument(
-        "--board", required=True, help="inner corners per row x per column, e.g. 9x6"
+        "folder", metavar="FOLDER", help="folder of chessboard images (png, jpg, ...)"
     )
     calibrate.add_argument(
-        "--square-m", type=_positive, default=0.025, help="square edge in metres (default: 0.025)"
+        "--board",
+        metavar="COLSxROWS",
+        required=True,
+        help="inner corners per row x per column, e.g. 9x6",
     )
     calibrate.add_argument(
-        "--out", default="camera_info.yaml", help="camera_info file to write (default: %(default)s)"
+        "--square-m",
+        metavar="M",
+        type=_positive,
+        default=0.025,
+        help="square edge in metres (default: 0.025)",
+    )
+    calibrate.add_argument(
+        "--out",
+        metavar="FILE",
+        default="camera_info.yaml",
+        help="camera_info file to write (default: %(default)s)",
     )
     calibrate.set_defaults(func=_cmd_calibrate)
 
@@ -467,10 +509,15 @@ def build_parser() -> argparse.ArgumentParser:
         description="Make a recording folder that `fusionscope serve` opens.",
     )
     kinds = imp.add_subparsers(dest="kind", required=True)
+    mapping_help = "MAPPING.yaml (--mapping), for example:\n\n" + textwrap.indent(
+        MAPPING_EXAMPLE, "  "
+    )
     video = kinds.add_parser(
         "video",
         help="any video OpenCV reads",
-        description=(
+        epilog=mapping_help,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=_paragraph(
             "Frames are made grey, resized to --width (height by the aspect ratio) and "
             "resampled to --fps: each output time takes the source frame nearest in time. "
             "Time stamps are the output times on the video's clock (0 at its first frame) plus "
@@ -482,23 +529,32 @@ def build_parser() -> argparse.ArgumentParser:
     video.add_argument("out_dir", metavar="OUT_DIR", help="new or empty folder for the recording")
     _image_size_args(video)
     video.add_argument(
-        "--fps", type=_positive, default=10.0, help="output frame rate (default: 10, paper 002)"
+        "--fps",
+        metavar="HZ",
+        type=_positive,
+        default=10.0,
+        help="output frame rate (default: 10, paper 002)",
     )
     video.add_argument(
         "--start-ns",
+        metavar="NS",
         type=_non_negative_int,
         help="time stamp (ns) of the video's first frame, without CAN (default: 0)",
     )
     video.add_argument(
         "--from-s",
+        metavar="S",
         type=_non_negative,
         default=0.0,
         help="start of the clip on the video's clock (s)",
     )
-    video.add_argument("--to-s", type=_positive, help="end of the clip on the video's clock (s)")
+    video.add_argument(
+        "--to-s", metavar="S", type=_positive, help="end of the clip on the video's clock (s)"
+    )
     _can_args(video, from_bag=False)
     video.add_argument(
         "--video-start-s",
+        metavar="S",
         type=_non_negative,
         help="with --can: the CAN-clock time (s) of the video's first frame",
     )
@@ -508,12 +564,15 @@ def build_parser() -> argparse.ArgumentParser:
     still = kinds.add_parser(
         "still",
         help="one image at a known time (e.g. with a CAN log of that moment)",
+        epilog=mapping_help,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
         description="One frame, made grey and resized to --width, stamped --time-s.",
     )
     still.add_argument("source", metavar="IMAGE", help="the image file")
     still.add_argument("out_dir", metavar="OUT_DIR", help="new or empty folder for the recording")
     still.add_argument(
         "--time-s",
+        metavar="S",
         type=_non_negative,
         help="time of the image (s); with --can on the CAN log's clock (required then); default 0",
     )
@@ -525,7 +584,9 @@ def build_parser() -> argparse.ArgumentParser:
     bag = kinds.add_parser(
         "bag",
         help="a ROS 1 .bag file or a ROS 2 bag folder, copied as is",
-        description=(
+        epilog=mapping_help,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=_paragraph(
             "The bag is copied into the recording; topics not named are found by message "
             "type. Images keep their size: the calibration must be for it. CAN: --can LOG, "
             "or (without --can) the bag's can_msgs/Frame topic, with --dbc and --mapping."
@@ -533,8 +594,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bag.add_argument("source", metavar="BAG", help="ROS 1 .bag file or ROS 2 bag folder")
     bag.add_argument("out_dir", metavar="OUT_DIR", help="new or empty folder for the recording")
-    bag.add_argument("--camera-topic", help="camera topic (default: the only image topic)")
-    bag.add_argument("--radar-topic", help="radar topic (default: the only radar topic, if any)")
+    bag.add_argument(
+        "--camera-topic", metavar="TOPIC", help="camera topic (default: the only image topic)"
+    )
+    bag.add_argument(
+        "--radar-topic", metavar="TOPIC", help="radar topic (default: the only radar topic, if any)"
+    )
     _can_args(bag, from_bag=True)
     _common_import_args(bag)
     bag.set_defaults(func=_cmd_import)

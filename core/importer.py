@@ -16,25 +16,9 @@ nothing behind; OUT_DIR must be new or empty.
 
 CAN mapping file (`--mapping`): the `can:` and/or `radar:` sections of recording.yaml without
 `log`, `bag`, `topic` and `dbc`, which come from the command line (`--can LOG` or the bag's
-CAN topic, `--dbc`). Each section keeps its own `channel`; each gets the DBC files that define
-its messages. The Toyota RAV4 of comma2k19 (`realdata/comma2k19-rav4`):
-
-    can:                             # speed and yaw rate (optional section)
-      channel: can0                  # optional: keep only frames of this channel
-      speed: {message: SPEED, signal: SPEED, unit: km/h}               # m/s, km/h, mph
-      yaw_rate: {message: KINEMATICS, signal: YAW_RATE, unit: deg/s}   # rad/s, deg/s
-      yaw_rate_bias: standstill      # optional
-    radar:                           # radar tracks over CAN (optional section)
-      can:
-        channel: can1
-        messages: TRACK_A_*          # one DBC message per track slot, shell pattern
-        distance: {signal: LONG_DIST, unit: m}
-        lateral: {signal: LAT_DIST, unit: m, sign: -1}   # the bus says positive right
-        range_rate: {signal: REL_SPEED, unit: m/s}
-        valid: {signal: VALID}
-
-`sign: -1` flips a signal into the engine's convention (speed forward, yaw rate left, lateral
-left, range rate receding positive).
+CAN topic, `--dbc`). Each section keeps its own `channel`, and gets the DBC files that define
+its messages (DBCs of different buses may reuse frame ids). MAPPING_EXAMPLE below is the one
+of the Toyota RAV4 of comma2k19.
 
 Where nothing records the speed, `Assumptions` (a constant speed and yaw rate) go into the
 manifest; without either, speed is NaN and the engine's motion stereo cannot work.
@@ -92,6 +76,26 @@ from core.io.writer import (
     png_image_message,
 )
 from core.io.yamlfile import Fields, load_yaml_mapping
+
+MAPPING_EXAMPLE = """\
+# Toyota RAV4 (comma2k19): speed and yaw rate on can0, the forward radar's tracks on can1.
+can:                                   # optional section: speed and yaw rate
+  channel: can0                        # optional: keep only frames of this channel
+  speed: {message: SPEED, signal: SPEED, unit: km/h}              # units: m/s, km/h, mph
+  yaw_rate: {message: KINEMATICS, signal: YAW_RATE, unit: deg/s}  # units: rad/s, deg/s
+  # yaw_rate_bias: standstill          # optional: subtract the yaw rate of a standing car
+radar:                                 # optional section: radar tracks over CAN
+  can:
+    channel: can1
+    messages: TRACK_A_*                # one DBC message per track slot; a shell pattern
+    distance: {signal: LONG_DIST, unit: m}
+    lateral: {signal: LAT_DIST, unit: m, sign: -1}   # the bus says positive right
+    range_rate: {signal: REL_SPEED, unit: m/s}       # optional
+    valid: {signal: VALID}                           # optional: kept when non-zero
+    # track_id: {signal: ID}           # optional; default: the message's place in the family
+# sign: -1 flips a signal into the engine's convention: speed forward, yaw rate left,
+# lateral left, range rate receding positive.
+"""
 
 GreyImage = npt.NDArray[np.uint8]
 Progress = Callable[[int, int], None]
@@ -222,7 +226,6 @@ def _build_calibration(
     elif isinstance(intr, FieldOfView):
         intrinsics = Intrinsics.from_fov(ow, oh, math.radians(intr.hfov_deg))
         source = f"pinhole from a horizontal field of view of {intr.hfov_deg:g} deg, centred"
-        source_size = out_size
     else:
         at_source = Intrinsics(
             fx_px=intr.fx_px,
@@ -233,12 +236,11 @@ def _build_calibration(
             height_px=sh,
         )
         intrinsics = scale_intrinsics(at_source, ow, oh)
-        i = at_source
         source = (
-            f"pinhole fx {i.fx_px:g}, fy {i.fy_px:g}, cx {i.cx_px:g}, cy {i.cy_px:g} px "
-            f"at {sw}x{sh}"
+            f"pinhole fx {at_source.fx_px:g}, fy {at_source.fy_px:g}, cx {at_source.cx_px:g}, "
+            f"cy {at_source.cy_px:g} px at {sw}x{sh}"
         )
-    if source_size != out_size:
+    if source_size != out_size and not isinstance(intr, FieldOfView):
         source += f", scaled to {ow}x{oh}"
     if has_radar and spec.radar_mount is None:
         raise ValueError(

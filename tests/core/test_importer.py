@@ -22,7 +22,7 @@ from rosbags.typesys.store import Typestore
 from core.calibrate import save_camera_info
 from core.camera import Intrinsics
 from core.cli import main
-from core.importer import scale_intrinsics
+from core.importer import MAPPING_EXAMPLE, scale_intrinsics
 from core.io import Drive, load_calibration, load_manifest, radar_msgs
 from core.io.errors import RecordingError
 from core.io.manifest import BagStream, RadarCanSource
@@ -30,20 +30,7 @@ from core.io.writer import png_image_message, vehicle_dbc_path
 
 NS = 1_000_000_000
 
-RAV4_MAPPING = """\
-can:
-  channel: can0
-  speed: {message: SPEED, signal: SPEED, unit: km/h}
-  yaw_rate: {message: KINEMATICS, signal: YAW_RATE, unit: deg/s}
-radar:
-  can:
-    channel: can1
-    messages: TRACK_A_*
-    distance: {signal: LONG_DIST, unit: m}
-    lateral: {signal: LAT_DIST, unit: m, sign: -1}
-    range_rate: {signal: REL_SPEED, unit: m/s}
-    valid: {signal: VALID}
-"""
+RAV4_MAPPING = MAPPING_EXAMPLE  # the documented example is the RAV4's
 RAV4_TIME_S = 46408.547  # realdata README: the camera frame's time on the CAN clock
 RAV4_RADAR_X_M = 2.7
 # The first SPEED frame (0xB4 at 46408.585 s, after the image) carries 0x0B7A in bytes 5-6:
