@@ -616,9 +616,14 @@ def _blf_frames(path: Path, gz: bool, warn: Warn) -> Iterator[CanFrame]:
         # python-can ends a file cut short without a word; its header knows the full size.
         size = path.stat().st_size
         if not gz and reader.file_size > size:
+            cut = f"{path}: the BLF header gives {reader.file_size} bytes, the file has {size}"
+            if n_frames == 0:
+                raise RecordingError(f"{cut}: it was cut short before its first CAN frame")
+            warn(f"{cut}: it was cut short; kept the {n_frames} frames before the cut")
+        elif n_frames == 0 and reader.object_count > 0:
             warn(
-                f"{path}: the BLF header gives {reader.file_size} bytes, the file has {size}: "
-                f"it was cut short; kept the {n_frames} frames before the cut"
+                f"{path}: the BLF header counts {reader.object_count} objects, but none is a "
+                "CAN data frame (other buses, or a damaged file)"
             )
     finally:
         reader.stop()

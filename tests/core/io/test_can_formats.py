@@ -362,6 +362,31 @@ def test_truncated_blf_keeps_the_frames_before_the_break(tmp_path: Path, junk: b
         ]
 
 
+def test_blf_cut_before_its_first_frame_raises(tmp_path: Path) -> None:
+    path = tmp_path / "stub.blf"
+    _write(path, ".blf", DATA)
+    full = path.stat().st_size
+    path.write_bytes(path.read_bytes()[: blf.FILE_HEADER_SIZE + 40])
+    with pytest.raises(
+        RecordingError,
+        match=rf"stub\.blf: the BLF header gives {full} bytes, the file has "
+        rf"{blf.FILE_HEADER_SIZE + 40}: it was cut short before its first CAN frame",
+    ):
+        _read(path)
+
+
+def test_blf_without_data_frames_says_so(tmp_path: Path) -> None:
+    path = tmp_path / "errors.blf"
+    _write(path, ".blf", [m for m in _messages() if m.is_error_frame])
+    assert _read(path) == (
+        [],
+        [
+            f"{path}: the BLF header counts 1 objects, but none is a CAN data frame "
+            "(other buses, or a damaged file)"
+        ],
+    )
+
+
 def test_unsupported_trc_version_and_missing_columns_raise(tmp_path: Path) -> None:
     with pytest.raises(RecordingError, match=r"v12\.trc: line 1: TRC file version '1\.2'"):
         _excerpt(tmp_path, "v12.trc", ";$FILEVERSION=1.2\n 1) 1.0 1 Rx 0100 1 00\n")
