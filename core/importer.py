@@ -34,7 +34,6 @@ import difflib
 import fnmatch
 import math
 import os
-import re
 import shutil
 import uuid
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
@@ -53,8 +52,16 @@ from core.camera import CameraModel, Extrinsics, Intrinsics
 from core.io import radar_msgs
 from core.io.bag import CAN_TYPES, RADAR_TYPES, BagReader, CameraStream
 from core.io.calibration import Calibration, RadarMount, load_calibration, save_calibration
+from core.io.can_radar import natural_key
 from core.io.canframe import CanFrame
-from core.io.canlog import SignalMapping, find_signal, iter_log_frames, load_dbc
+from core.io.canlog import (
+    SignalMapping,
+    check_signals,
+    find_signal,
+    id_text,
+    iter_log_frames,
+    load_dbc,
+)
 from core.io.errors import RecordingError
 from core.io.manifest import (
     MANIFEST_NAME,
@@ -380,8 +387,33 @@ def _scan(frames: Iterable[CanFrame], where: str, keep_times: set[tuple[int, boo
     )
 
 
-def _natural(name: str) -> list[int | str]:
-    return [int(p) if p.isdigit() else p for p in re.split(r"(\d+)", name)]
+def _parse_mapping(
+    spec: CanSpec, source: Mapping[str, str]
+) -> tuple[CanSource | None, RadarCanSource | None]:
+    """The mapping's sections, with `source` (log, or bag and topic) and all DBCs filled in,
+    parsed as recording.yaml parses them; errors name the mapping file."""
+    can_raw, radar_raw = _mapping_sections(spec.mapping)
+    dbc_names = [p.name for p in spec.dbc]
+    raw: dict[str, Any] = {
+        "format_version": 1,
+        "name": "mapping",
+        "camera": {"bag": BAG_DIR},
+        "calibration": CALIBRATION_NAME,
+    }
+    if can_raw is not None:
+        raw["can"] = {**source, "dbc": dbc_names, **can_raw}
+    if radar_raw is not None:
+        raw["radar"] = {"can": {**source, "dbc": dbc_names, **radar_raw}}
+    manifest_path = f"{spec.mapping.parent / MANIFEST_NAME}: "
+    try:
+        parsed = parse_manifest(raw, spec.mapping.parent)
+    except RecordingError as err:
+        text = str(err)
+        if text.startswith(manifest_path):
+            text = f"{spec.mapping}: " + text[len(manifest_path) :]
+        raise RecordingError(text) from err
+    radar = parsed.radar if isinstance(parsed.radar, RadarCanSource) else None
+    return parsed.can, radar
 
 
 def _find_message(dbs: Mapping[str, Database], spec: CanSpec, mapping: SignalMapping) -> Message:
@@ -401,6 +433,85 @@ def _find_message(dbs: Mapping[str, Database], spec: CanSpec, mapping: SignalMap
     )
 
 
+# (message name, frame id, extended) of the messages a section reads.
+MessageIds = list[tuple[str, int, bool]]
+
+
+def _assign_dbcs(
+    spec: CanSpec, can_src: CanSource | None, radar_src: RadarCanSource | None
+) -> tuple[CanSource | None, RadarCanSource | None, dict[str, MessageIds], list[str]]:
+    """Each section with only the DBCs that define its messages, the messages, notes.
+
+    RecordingError naming the mapping when a message or signal is in none of the DBCs.
+    """
+    dbs = {p.name: load_dbc([p]) for p in spec.dbc}
+    listing = ", ".join(str(p) for p in spec.dbc)
+
+    def defining(names: set[str]) -> tuple[str, ...]:
+        return tuple(n for n, db in dbs.items() if names & {m.name for m in db.messages})
+
+    ids: dict[str, MessageIds] = {}
+    if can_src is not None:
+        messages = [_find_message(dbs, spec, m) for m in (can_src.speed, can_src.yaw_rate)]
+        bus = replace(can_src.bus, dbc=defining({m.name for m in messages}))
+        can_src = replace(can_src, bus=bus)
+        ids["can"] = [(m.name, m.frame_id, m.is_extended_frame) for m in messages]
+    if radar_src is not None:
+        pattern = radar_src.messages
+        family = [
+            m for db in dbs.values() for m in db.messages if fnmatch.fnmatchcase(m.name, pattern)
+        ]
+        if not family:
+            raise RecordingError(
+                f"{spec.mapping}: radar.can.messages: the pattern {pattern!r} matches no "
+                f"message of {listing}"
+            )
+        family.sort(key=lambda m: natural_key(m.name))
+        r = radar_src
+        fields = (r.distance, r.lateral, r.range_rate, r.valid, r.track_id)
+        for message in family:
+            check_signals(message, [f.signal for f in fields if f is not None], str(spec.mapping))
+        bus = replace(radar_src.bus, dbc=defining({m.name for m in family}))
+        radar_src = replace(radar_src, bus=bus)
+        ids["radar"] = [(m.name, m.frame_id, m.is_extended_frame) for m in family]
+    used = {d for src in (can_src, radar_src) if src is not None for d in src.bus.dbc}
+    notes = [
+        f"{name}: defines none of the mapped messages (copied all the same)"
+        for name in dbs
+        if name not in used
+    ]
+    return can_src, radar_src, ids, notes
+
+
+def _check_traffic(
+    scan: _FrameScan,
+    sections: Mapping[str, CanSource | RadarCanSource],
+    ids: Mapping[str, MessageIds],
+    source_name: str,
+    mapping: Path,
+) -> list[str]:
+    """Notes on mapped messages missing from the frames; RecordingError when speed or yaw
+    rate is missing, or every radar message (a radar may leave track slots unused)."""
+    notes = []
+    for section, src in sections.items():
+        channel = src.bus.channel
+        missing = []
+        for name, frame_id, ext in ids[section]:
+            on = {ch for (i, e, ch) in scan.counts if (i, e) == (frame_id, ext)}
+            if (channel is None and not on) or (channel is not None and channel not in on):
+                elsewhere = ", ".join(sorted(str(ch) for ch in on)) or "none"
+                missing.append(f"{name} ({id_text(frame_id, ext)}; channels with it: {elsewhere})")
+        if missing and (section == "can" or len(missing) == len(ids[section])):
+            where = f"on channel {channel}, " if channel is not None else ""
+            raise RecordingError(
+                f"{source_name}: {where}no frames of {', '.join(missing)}; the mapping's "
+                f"{section} section names them ({mapping})"
+            )
+        if missing:
+            notes.append(f"{source_name}: no frames of {', '.join(missing)}")
+    return notes
+
+
 def _prepare_can(
     spec: CanSpec,
     bag_name: str | None = None,
@@ -412,124 +523,41 @@ def _prepare_can(
     bag_name, bag_topic, bag_frames: the copied bag, its CAN topic and that topic's frames
     when the frames come from a bag, not from `spec.log`.
     """
-    can_raw, radar_raw = _mapping_sections(spec.mapping)
     reserved = RESERVED_NAMES if bag_name is None else RESERVED_NAMES | {bag_name}
     files = _copy_names(spec, reserved)
-    dbc_names = [p.name for p in spec.dbc]
-    source: dict[str, Any] = (
-        {"log": spec.log.name}
-        if spec.log is not None
-        else {"bag": bag_name, **({"topic": bag_topic} if bag_topic else {})}
-    )
-    raw: dict[str, Any] = {
-        "format_version": 1,
-        "name": "mapping",
-        "camera": {"bag": BAG_DIR},
-        "calibration": CALIBRATION_NAME,
-    }
-    if can_raw is not None:
-        raw["can"] = {**source, "dbc": dbc_names, **can_raw}
-    if radar_raw is not None:
-        raw["radar"] = {"can": {**source, "dbc": dbc_names, **radar_raw}}
-    here = spec.mapping.parent / MANIFEST_NAME
-    try:
-        parsed = parse_manifest(raw, spec.mapping.parent)
-    except RecordingError as err:
-        text = str(err)
-        if text.startswith(f"{here}: "):
-            text = f"{spec.mapping}: " + text[len(f"{here}: ") :]
-        raise RecordingError(text) from err
-    can_src = parsed.can
-    radar_src = parsed.radar if isinstance(parsed.radar, RadarCanSource) else None
+    source: dict[str, str] = {}
+    if spec.log is not None:
+        source["log"] = spec.log.name
+    else:
+        source["bag"] = str(bag_name)
+        if bag_topic:
+            source["topic"] = bag_topic
+    can_src, radar_src = _parse_mapping(spec, source)
+    can_src, radar_src, ids, notes = _assign_dbcs(spec, can_src, radar_src)
 
-    # Which DBC defines which section's messages; every section needs one.
-    dbs = {p.name: load_dbc([p]) for p in spec.dbc}
-    listing = ", ".join(str(p) for p in spec.dbc)
-    notes: list[str] = []
-    ids: dict[str, list[tuple[str, int, bool]]] = {}
-    if can_src is not None:
-        messages = [_find_message(dbs, spec, m) for m in (can_src.speed, can_src.yaw_rate)]
-        wanted = {m.name for m in messages}
-        chosen = tuple(n for n in dbc_names if wanted & {m.name for m in dbs[n].messages})
-        can_src = replace(can_src, bus=replace(can_src.bus, dbc=chosen))
-        ids["can"] = [(m.name, m.frame_id, m.is_extended_frame) for m in messages]
-    if radar_src is not None:
-        family = sorted(
-            (
-                m
-                for db in dbs.values()
-                for m in db.messages
-                if fnmatch.fnmatchcase(m.name, radar_src.messages)
-            ),
-            key=lambda m: _natural(m.name),
-        )
-        if not family:
-            raise RecordingError(
-                f"{spec.mapping}: radar.can.messages: the pattern {radar_src.messages!r} "
-                f"matches no message of {listing}"
-            )
-        fields = [radar_src.distance, radar_src.lateral, radar_src.range_rate, radar_src.valid]
-        fields.append(radar_src.track_id)
-        for message in family:
-            names = {s.name for s in message.signals}
-            for fld in fields:
-                if fld is not None and fld.signal not in names:
-                    raise RecordingError(
-                        f"{spec.mapping}: radar.can: message {message.name} of {listing} has "
-                        f"no signal {fld.signal!r}; its signals: {', '.join(sorted(names))}"
-                    )
-        family_names = {m.name for m in family}
-        chosen = tuple(n for n in dbc_names if family_names & {m.name for m in dbs[n].messages})
-        radar_src = replace(radar_src, bus=replace(radar_src.bus, dbc=chosen))
-        ids["radar"] = [(m.name, m.frame_id, m.is_extended_frame) for m in family]
-    used = set()
-    for src in (can_src, radar_src):
-        if src is not None:
-            used |= set(src.bus.dbc)
-    for name in dbc_names:
-        if name not in used:
-            notes.append(f"{name}: defines none of the mapped messages (copied all the same)")
-
-    # The log holds the mapped messages on the mapped channels.
+    # The frames hold the mapped messages on the mapped channels.
     span = None
     radar_times = np.zeros(0, dtype=np.int64)
     source_name = str(spec.log) if spec.log is not None else f"{bag_name}: {bag_topic}"
     frames: Iterable[CanFrame] | None = None
     if spec.log is not None:
         frames = iter_log_frames(spec.log, warn=notes.append)
-    if frames is None and bag_frames is not None:
+    elif bag_frames is not None:
         frames = bag_frames()
     if frames is not None:
         first_radar = ids["radar"][0][1:] if "radar" in ids else None
         scan = _scan(frames, source_name, {first_radar} if first_radar else set())
         span = (scan.first_ns, scan.last_ns)
-        for section, src in (("can", can_src), ("radar", radar_src)):
-            if src is None:
-                continue
-            channel = src.bus.channel
-            missing = []
-            for name, frame_id, ext in ids[section]:
-                on = {str(ch) for (i, e, ch) in scan.counts if (i, e) == (frame_id, ext)}
-                if (channel is None and not on) or (channel is not None and channel not in on):
-                    elsewhere = ", ".join(sorted(on)) or "none"
-                    missing.append(f"{name} (0x{frame_id:X}; channels with it: {elsewhere})")
-            # Speed and yaw rate must both be there; a radar may leave track slots unused.
-            if missing and (section == "can" or len(missing) == len(ids[section])):
-                where = f" on channel {channel}" if channel is not None else ""
-                raise RecordingError(
-                    f"{source_name}: no frames of {', '.join(missing)}{where}, which the "
-                    f"mapping's {section} section names ({spec.mapping})"
-                )
-            if missing:
-                notes.append(f"{source_name}: no frames of {', '.join(missing)}")
+        sections = {k: v for k, v in (("can", can_src), ("radar", radar_src)) if v is not None}
+        notes += _check_traffic(scan, sections, ids, source_name, spec.mapping)
         if first_radar is not None:
             radar_times = scan.times_ns[first_radar]
     text = ""
     if can_src is not None:
-        s, y = can_src.speed, can_src.yaw_rate
+        sp, yr = can_src.speed, can_src.yaw_rate
         text += (
-            f" Speed from CAN {s.message}.{s.signal} ({s.unit}), yaw rate from "
-            f"{y.message}.{y.signal} ({y.unit})."
+            f" Speed from CAN {sp.message}.{sp.signal} ({sp.unit}), yaw rate from "
+            f"{yr.message}.{yr.signal} ({yr.unit})."
         )
     if radar_src is not None:
         text += f" Radar tracks over CAN: {radar_src.messages}."
@@ -628,7 +656,11 @@ class ImportResult:
 
 def check_out_dir(out_dir: Path) -> None:
     """RecordingError unless `out_dir` is new or an empty folder."""
-    if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
+    if out_dir.exists() and not out_dir.is_dir():
+        raise RecordingError(
+            f"{out_dir}: expected a new or empty folder for the recording, it is a file"
+        )
+    if out_dir.is_dir() and any(out_dir.iterdir()):
         raise RecordingError(
             f"{out_dir}: expected a new or empty folder for the recording, it is not empty"
         )

@@ -378,7 +378,7 @@ def test_rav4_radar_without_a_mount_is_refused(
         ),
         (
             RAV4_MAPPING.replace("channel: can0", "channel: can3"),
-            "no frames of SPEED (0xB4; channels with it: can0)",
+            "on channel can3, no frames of SPEED (0x0B4; channels with it: can0)",
         ),
     ],
 )
@@ -444,6 +444,12 @@ def test_a_non_empty_out_dir_is_refused_and_left_alone(
     assert code == 2
     assert f"{out}: expected a new or empty folder for the recording, it is not empty" in err
     assert [p.name for p in out.iterdir()] == ["keep.txt"]
+    code, _, err = run(capsys, "import", "video", video, out / "keep.txt", "--hfov-deg", "60")
+    assert (
+        code == 2
+        and "keep.txt: expected a new or empty folder for the recording, it is a file" in err
+    )
+    assert (out / "keep.txt").read_text() == "mine"
 
 
 def test_an_empty_out_dir_is_filled(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
