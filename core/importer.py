@@ -849,7 +849,7 @@ def _open_video(path: Path) -> _Video:
 
 
 def _name(options: ImportOptions, source: Path) -> str:
-    return options.name if options.name is not None else source.stem.split(".")[0] or "import"
+    return options.name if options.name is not None else source.stem or source.name
 
 
 def _output_ns(sampling: VideoSampling, k: int) -> int:
