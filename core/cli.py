@@ -3,9 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+import textwrap
+import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from core.importer import CalibrationSpec, CanSpec, ImportOptions, ImportResult, IntrinsicsSpec
 
 DEFAULT_RECORDINGS = Path(__file__).resolve().parents[1] / "recordings"
 DEFAULT_RECORDING = "highway"
@@ -24,6 +31,278 @@ class ProgressBar:
         end = "\n" if done >= total else ""
         sys.stderr.write(f"\r{self.label} [{bar}] {done}/{total}{end}")
         sys.stderr.flush()
+
+
+def _finite(text: str) -> float:
+    """argparse type: a finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def _positive(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    value = _finite(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
+def _non_negative(text: str) -> float:
+    """argparse type: a finite number >= 0."""
+    value = _finite(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
+    return value
+
+
+def _non_negative_int(text: str) -> int:
+    """argparse type: an integer >= 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}")
+    return value
+
+
+def _s_to_ns(seconds: float) -> int:
+    return round(seconds * 1_000_000_000)
+
+
+def _paragraph(text: str) -> str:
+    """Help text wrapped for a parser whose epilog keeps its own line breaks."""
+    return textwrap.fill(text, width=79, break_on_hyphens=False)
+
+
+class _UsageError(Exception):
+    """A combination of flags that does not go together; the message names them."""
+
+
+def _cmd_calibrate(args: argparse.Namespace) -> int:
+    from core.calibrate import (
+        Chessboard,
+        calibrate_chessboard,
+        read_views,
+        save_camera_info,
+    )
+    from core.io.errors import RecordingError
+
+    out = Path(args.out)
+    try:
+        if not out.parent.is_dir():
+            raise ValueError(f"--out {out}: the folder {out.parent} does not exist")
+        board = Chessboard.from_text(args.board, args.square_m)
+        result = calibrate_chessboard(read_views(Path(args.folder)), board)
+        save_camera_info(result.intrinsics, out, camera_name=Path(args.folder).resolve().name)
+    except (ValueError, RecordingError, OSError) as err:
+        print(f"fusionscope calibrate: {err}", file=sys.stderr)
+        return 2
+    i = result.intrinsics
+    names = ("k1", "k2", "p1", "p2", "k3")
+    print(
+        f"views used: {len(result.used)} of {len(result.views)} "
+        f"({board.cols}x{board.rows} inner corners, {board.square_m:g} m squares)"
+    )
+    for v in result.skipped:
+        print(f"skipped: {v.name}: {v.skipped}")
+    print(f"image size: {i.width_px}x{i.height_px} px")
+    print(f"fx, fy: {i.fx_px:.2f}, {i.fy_px:.2f} px")
+    print(f"cx, cy: {i.cx_px:.2f}, {i.cy_px:.2f} px")
+    print(
+        "distortion (plumb_bob): "
+        + "  ".join(f"{n} {d:.5g}" for n, d in zip(names, i.distortion, strict=True))
+    )
+    print(f"RMS reprojection error: {result.rms_reprojection_px:.3f} px")
+    print(f"wrote {out}")
+    return 0
+
+
+def _calibration_spec(args: argparse.Namespace) -> CalibrationSpec:
+    from core.importer import CalibrationSpec, CameraInfoFile, FieldOfView, Pinhole
+    from core.io.calibration import RadarMount
+
+    given = [
+        flag
+        for flag, value in (
+            ("--camera-info", args.camera_info),
+            ("--hfov-deg", args.hfov_deg),
+            ("--fx", args.fx),
+        )
+        if value is not None
+    ]
+    if len(given) != 1:
+        raise _UsageError(
+            "calibration: expected exactly one of --camera-info FILE, --hfov-deg D and "
+            f"--fx FX [--fy --cx --cy], got {', '.join(given) or 'none'}"
+        )
+    extra = [
+        f for f, v in (("--fy", args.fy), ("--cx", args.cx), ("--cy", args.cy)) if v is not None
+    ]
+    if extra and args.fx is None:
+        raise _UsageError(f"{', '.join(extra)}: only with --fx")
+    intrinsics: IntrinsicsSpec
+    if args.camera_info is not None:
+        intrinsics = CameraInfoFile(Path(args.camera_info))
+    elif args.hfov_deg is not None:
+        intrinsics = FieldOfView(args.hfov_deg)
+    else:
+        intrinsics = Pinhole(args.fx, args.fy, args.cx, args.cy)
+    radar = [
+        f
+        for f, v in (
+            ("--radar-y-m", args.radar_y_m),
+            ("--radar-z-m", args.radar_z_m),
+            ("--radar-yaw-rad", args.radar_yaw_rad),
+        )
+        if v is not None
+    ]
+    if radar and args.radar_x_m is None:
+        raise _UsageError(f"{', '.join(radar)}: only with --radar-x-m")
+    mount = None
+    if args.radar_x_m is not None:
+        mount = RadarMount(
+            args.radar_x_m, args.radar_y_m or 0.0, args.radar_z_m or 0.0, args.radar_yaw_rad or 0.0
+        )
+    return CalibrationSpec(
+        intrinsics,
+        camera_height_m=args.camera_height_m,
+        camera_x_m=args.camera_x_m,
+        pitch_rad=args.pitch_rad,
+        radar_mount=mount,
+    )
+
+
+def _can_spec(args: argparse.Namespace, from_bag: bool) -> CanSpec | None:
+    from core.importer import CanSpec
+
+    log = getattr(args, "can", None)
+    topic = getattr(args, "can_topic", None)
+    given = {"--can": log, "--can-topic": topic, "--dbc": args.dbc, "--mapping": args.mapping}
+    named = [flag for flag, value in given.items() if value]
+    if not named:
+        return None
+    missing = [f for f in ("--dbc", "--mapping") if not given[f]]
+    if not from_bag and log is None:
+        missing.insert(0, "--can")
+    if missing:
+        raise _UsageError(
+            f"{', '.join(named)}: CAN input also needs {', '.join(missing)} "
+            "(the log, its DBC files and the mapping of signals)"
+        )
+    if log is not None and topic is not None:
+        raise _UsageError(f"--can {log}, --can-topic {topic}: expected one CAN source")
+    return CanSpec(
+        dbc=tuple(Path(d) for d in args.dbc),
+        mapping=Path(args.mapping),
+        log=Path(log) if log is not None else None,
+        bag_topic=topic,
+    )
+
+
+def _options(args: argparse.Namespace) -> ImportOptions:
+    from core.importer import ImportOptions
+    from core.io.manifest import Assumptions
+
+    return ImportOptions(
+        name=args.name,
+        assumptions=Assumptions(args.assume_speed_mps, args.assume_yaw_rate_radps),
+        max_radar_skew_ms=args.max_radar_skew_ms,
+    )
+
+
+def _report(result: ImportResult, seconds: float) -> None:
+    span_s = (result.last_t_ns - result.first_t_ns) / 1e9
+    print(
+        f"{result.out_dir}: {result.frames} frames, {result.width_px}x{result.height_px}, "
+        f"stamps {result.first_t_ns / 1e9:.3f} to {result.last_t_ns / 1e9:.3f} s "
+        f"({span_s:.1f} s), in {seconds:.1f} s"
+    )
+    for note in result.notes:
+        print(f"note: {note}")
+
+
+def _cmd_import(args: argparse.Namespace) -> int:
+    from core.importer import VideoSampling, import_bag, import_still, import_video
+    from core.io.errors import RecordingError
+
+    command = f"fusionscope import {args.kind}"
+    started = time.monotonic()
+    try:
+        calibration = _calibration_spec(args)
+        can_spec = _can_spec(args, from_bag=args.kind == "bag")
+        options = _options(args)
+        out = Path(args.out_dir)
+        if args.kind == "video":
+            if can_spec is not None and args.video_start_s is None:
+                raise _UsageError(
+                    "--video-start-s: required with --can: the CAN-clock time (s) of the "
+                    "video's first frame"
+                )
+            if can_spec is None and args.video_start_s is not None:
+                raise _UsageError("--video-start-s: only with --can; without CAN use --start-ns")
+            if can_spec is not None and args.start_ns is not None:
+                raise _UsageError("--start-ns: with --can give --video-start-s instead")
+            if args.to_s is not None and args.to_s <= args.from_s:
+                raise _UsageError(
+                    f"--to-s {args.to_s:g}: expected a time after --from-s {args.from_s:g}"
+                )
+            start_ns = (
+                _s_to_ns(args.video_start_s)
+                if args.video_start_s is not None
+                else args.start_ns or 0
+            )
+            sampling = VideoSampling(args.width, args.fps, start_ns, args.from_s, args.to_s)
+            result = import_video(
+                Path(args.source),
+                out,
+                calibration,
+                sampling,
+                can_spec,
+                options,
+                progress=ProgressBar("import video"),
+            )
+        elif args.kind == "still":
+            if can_spec is not None and args.time_s is None:
+                raise _UsageError(
+                    "--time-s: required with --can: the CAN-clock time (s) of the image"
+                )
+            t_ns = _s_to_ns(args.time_s) if args.time_s is not None else 0
+            result = import_still(
+                Path(args.source), out, t_ns, calibration, args.width, can_spec, options
+            )
+        else:
+            result = import_bag(
+                Path(args.source),
+                out,
+                calibration,
+                args.camera_topic,
+                args.radar_topic,
+                can_spec,
+                options,
+                progress=ProgressBar("copy bag"),
+            )
+    except (_UsageError, ValueError, RecordingError, OSError) as err:
+        print(f"{command}: {err}", file=sys.stderr)
+        return 2
+    _report(result, time.monotonic() - started)
+    return 0
 
 
 def _cmd_synth(args: argparse.Namespace) -> int:
@@ -64,7 +343,110 @@ def _cmd_serve(args: argparse.Namespace) -> int:
     return 0
 
 
+def _image_size_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--width",
+        metavar="PX",
+        type=_positive_int,
+        default=640,
+        help="output width in px; the height follows the aspect ratio (default: 640, paper 001)",
+    )
+
+
+def _can_args(p: argparse.ArgumentParser, from_bag: bool) -> None:
+    g = p.add_argument_group("CAN (speed, yaw rate, radar tracks)")
+    g.add_argument(
+        "--can",
+        metavar="LOG",
+        help="CAN log (.blf .asc .log .trc .csv, also .gz), copied into the recording"
+        + ("; without it, the bag's can_msgs/Frame topic" if from_bag else ""),
+    )
+    if from_bag:
+        g.add_argument(
+            "--can-topic", metavar="TOPIC", help="the bag's CAN topic (default: the only one)"
+        )
+    g.add_argument(
+        "--dbc", action="append", help="DBC file decoding the CAN frames; repeat for several"
+    )
+    g.add_argument(
+        "--mapping",
+        metavar="MAPPING.yaml",
+        help="which DBC signals are speed, yaw rate and radar fields: `can:` and/or `radar:` "
+        "sections as in recording.yaml, without log/dbc (example below)",
+    )
+
+
+def _common_import_args(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("camera intrinsics (exactly one way)")
+    g.add_argument(
+        "--camera-info", metavar="FILE", help="ROS camera_info YAML (as calibrate writes)"
+    )
+    g.add_argument(
+        "--hfov-deg",
+        metavar="DEG",
+        type=_positive,
+        help="horizontal field of view: centred pinhole",
+    )
+    g.add_argument(
+        "--fx", metavar="PX", type=_positive, help="focal length (px) at the source's size"
+    )
+    g.add_argument("--fy", metavar="PX", type=_positive, help="with --fx (default: --fx)")
+    g.add_argument("--cx", metavar="PX", type=_finite, help="with --fx (default: the image centre)")
+    g.add_argument("--cy", metavar="PX", type=_finite, help="with --fx (default: the image centre)")
+    m = p.add_argument_group("mounting (vehicle frame: x forward, y left, z up)")
+    m.add_argument(
+        "--camera-height-m",
+        metavar="M",
+        type=_positive,
+        default=1.2,
+        help="camera above the road (default: 1.2)",
+    )
+    m.add_argument(
+        "--camera-x-m",
+        metavar="M",
+        type=_finite,
+        default=1.5,
+        help="camera ahead of the reference point (default: 1.5)",
+    )
+    m.add_argument(
+        "--pitch-rad", metavar="RAD", type=_finite, default=0.0, help="camera pitch, down positive"
+    )
+    m.add_argument(
+        "--radar-x-m", metavar="M", type=_finite, help="radar ahead of the reference point"
+    )
+    m.add_argument("--radar-y-m", metavar="M", type=_finite, help="radar to the left (default: 0)")
+    m.add_argument(
+        "--radar-z-m", metavar="M", type=_finite, help="radar above the road (default: 0)"
+    )
+    m.add_argument(
+        "--radar-yaw-rad", metavar="RAD", type=_finite, help="radar yaw, left positive (default: 0)"
+    )
+    a = p.add_argument_group("where nothing is recorded")
+    a.add_argument(
+        "--assume-speed-mps",
+        metavar="MPS",
+        type=_non_negative,
+        help="constant speed written to the manifest (without it and without CAN speed, "
+        "speed is NaN and motion stereo cannot work)",
+    )
+    a.add_argument(
+        "--assume-yaw-rate-radps",
+        metavar="RADPS",
+        type=_finite,
+        help="constant yaw rate, left positive (default: 0 when a speed is assumed)",
+    )
+    p.add_argument(
+        "--max-radar-skew-ms",
+        metavar="MS",
+        type=_positive,
+        help="pair a radar scan with a camera frame up to this far apart (default: half the "
+        "radar's period)",
+    )
+    p.add_argument("--name", help="recording name (default: the source file's stem)")
+
+
 def build_parser() -> argparse.ArgumentParser:
+    from core.importer import MAPPING_EXAMPLE
     from core.synth.scenarios import SCENARIOS
 
     parser = argparse.ArgumentParser(
@@ -86,6 +468,141 @@ def build_parser() -> argparse.ArgumentParser:
     serve.add_argument("--host", default="127.0.0.1", help="address to bind (default: 127.0.0.1)")
     serve.add_argument("--port", type=int, default=8080, help="port (default: 8080)")
     serve.set_defaults(func=_cmd_serve)
+
+    calibrate = sub.add_parser(
+        "calibrate",
+        help="camera intrinsics from chessboard images",
+        description=(
+            "Find the chessboard's inner corners in every image of FOLDER, fit one pinhole "
+            "camera with plumb_bob distortion (k1 k2 p1 p2 k3) to them, print it and write a "
+            "ROS camera_info YAML (which `fusionscope import --camera-info` reads). Images "
+            "where the board is not found, or of another size than most, are listed and skipped."
+        ),
+    )
+    calibrate.add_argument(
+        "folder", metavar="FOLDER", help="folder of chessboard images (png, jpg, ...)"
+    )
+    calibrate.add_argument(
+        "--board",
+        metavar="COLSxROWS",
+        required=True,
+        help="inner corners per row x per column, e.g. 9x6",
+    )
+    calibrate.add_argument(
+        "--square-m",
+        metavar="M",
+        type=_positive,
+        default=0.025,
+        help="square edge in metres (default: 0.025)",
+    )
+    calibrate.add_argument(
+        "--out",
+        metavar="FILE",
+        default="camera_info.yaml",
+        help="camera_info file to write (default: %(default)s)",
+    )
+    calibrate.set_defaults(func=_cmd_calibrate)
+
+    imp = sub.add_parser(
+        "import",
+        help="make a recording from a video, a still image or a ROS bag",
+        description="Make a recording folder that `fusionscope serve` opens.",
+    )
+    kinds = imp.add_subparsers(dest="kind", required=True)
+    mapping_help = "MAPPING.yaml (--mapping), for example:\n\n" + textwrap.indent(
+        MAPPING_EXAMPLE, "  "
+    )
+    video = kinds.add_parser(
+        "video",
+        help="any video OpenCV reads",
+        epilog=mapping_help,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=_paragraph(
+            "Frames are made grey, resized to --width (height by the aspect ratio) and "
+            "resampled to --fps: each output time takes the source frame nearest in time. "
+            "Time stamps are the output times on the video's clock (0 at its first frame) plus "
+            "--start-ns, or, with CAN, plus --video-start-s: the CAN log's time of the video's "
+            "first frame."
+        ),
+    )
+    video.add_argument("source", metavar="VIDEO", help="the video file")
+    video.add_argument("out_dir", metavar="OUT_DIR", help="new or empty folder for the recording")
+    _image_size_args(video)
+    video.add_argument(
+        "--fps",
+        metavar="HZ",
+        type=_positive,
+        default=10.0,
+        help="output frame rate (default: 10, paper 002)",
+    )
+    video.add_argument(
+        "--start-ns",
+        metavar="NS",
+        type=_non_negative_int,
+        help="time stamp (ns) of the video's first frame, without CAN (default: 0)",
+    )
+    video.add_argument(
+        "--from-s",
+        metavar="S",
+        type=_non_negative,
+        default=0.0,
+        help="start of the clip on the video's clock (s)",
+    )
+    video.add_argument(
+        "--to-s", metavar="S", type=_positive, help="end of the clip on the video's clock (s)"
+    )
+    _can_args(video, from_bag=False)
+    video.add_argument(
+        "--video-start-s",
+        metavar="S",
+        type=_non_negative,
+        help="with --can: the CAN-clock time (s) of the video's first frame",
+    )
+    _common_import_args(video)
+    video.set_defaults(func=_cmd_import)
+
+    still = kinds.add_parser(
+        "still",
+        help="one image at a known time (e.g. with a CAN log of that moment)",
+        epilog=mapping_help,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="One frame, made grey and resized to --width, stamped --time-s.",
+    )
+    still.add_argument("source", metavar="IMAGE", help="the image file")
+    still.add_argument("out_dir", metavar="OUT_DIR", help="new or empty folder for the recording")
+    still.add_argument(
+        "--time-s",
+        metavar="S",
+        type=_non_negative,
+        help="time of the image (s); with --can on the CAN log's clock (required then); default 0",
+    )
+    _image_size_args(still)
+    _can_args(still, from_bag=False)
+    _common_import_args(still)
+    still.set_defaults(func=_cmd_import)
+
+    bag = kinds.add_parser(
+        "bag",
+        help="a ROS 1 .bag file or a ROS 2 bag folder, copied as is",
+        epilog=mapping_help,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=_paragraph(
+            "The bag is copied into the recording; topics not named are found by message "
+            "type. Images keep their size: the calibration must be for it. CAN: --can LOG, "
+            "or (without --can) the bag's can_msgs/Frame topic, with --dbc and --mapping."
+        ),
+    )
+    bag.add_argument("source", metavar="BAG", help="ROS 1 .bag file or ROS 2 bag folder")
+    bag.add_argument("out_dir", metavar="OUT_DIR", help="new or empty folder for the recording")
+    bag.add_argument(
+        "--camera-topic", metavar="TOPIC", help="camera topic (default: the only image topic)"
+    )
+    bag.add_argument(
+        "--radar-topic", metavar="TOPIC", help="radar topic (default: the only radar topic, if any)"
+    )
+    _can_args(bag, from_bag=True)
+    _common_import_args(bag)
+    bag.set_defaults(func=_cmd_import)
 
     synth = sub.add_parser("synth", help="generate a synthetic drive with exact ground truth")
     synth.add_argument("--scenario", required=True, choices=sorted(SCENARIOS))

@@ -1,105 +1,340 @@
-"""Camera images and radar scans from a ROS bag (ROS 1 `.bag`, ROS 2 sqlite3 or MCAP).
+"""Camera images, radar scans and CAN frames from a ROS bag (ROS 1 `.bag`, ROS 2 sqlite3, MCAP).
 
-`BagReader` opens one bag with rosbags' AnyReader (radar_msgs registered), finds topics by
-name or by message type, indexes the camera topic's time stamps once and decodes one image
-on demand; radar messages are small and all decoded on open.
+`BagReader` opens one bag with rosbags' AnyReader, finds topics by name or by message type,
+checks that the bag's definition of a topic's message type has the fields read here, indexes
+the camera topic's time stamps once and decodes one image on demand; radar and CAN messages
+are small and read whole.
+
+A bag is a ROS 1 `.bag` file, a ROS 2 bag folder (metadata.yaml and its .db3 or .mcap files),
+or a single `.db3` or `.mcap` file. Any damage to it (truncation, a corrupt chunk, a garbage
+database, a message that does not deserialise) raises RecordingError naming the file, and the
+topic and time stamp when known: on open, or when the damaged message is read. rosbags wraps
+some of its errors in its own types and lets others through; `BAG_ERRORS` lists both.
 
 Notes:
     Time stamps are the bag's receive (log) times, not the header stamps: they are known
     without deserialising a message, which keeps opening a long drive cheap and random access
     exact. The writer of this project stores header stamp = log time.
+    A topic recorded through several connections (ROS 1 records one per publisher) is read as
+    one stream.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import struct
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from types import TracebackType
+from typing import Any, TypeAlias
 
+import apsw
 import cv2
 import numpy as np
 import numpy.typing as npt
 from rosbags.highlevel import AnyReader, AnyReaderError
-from rosbags.interfaces import Connection
+from rosbags.interfaces import Connection, Nodetype
+from rosbags.rosbag1 import ReaderError as Rosbag1Error
+from rosbags.rosbag2 import ReaderError as Rosbag2Error
+from rosbags.typesys.store import Typestore
 
 from core.io import radar_msgs
+from core.io.canframe import CanFrame
 from core.io.errors import RecordingError
+from core.io.radar_msgs import CAN_FRAME
 from core.io.radarscans import RadarScans
+from core.io.timeline import main_block
 
 Int64Array = npt.NDArray[np.int64]
 FloatArray = npt.NDArray[np.float64]
 
 CAMERA_TYPES = (radar_msgs.COMPRESSED_IMAGE, radar_msgs.IMAGE)
 RADAR_TYPES = (radar_msgs.RADAR_SCAN, radar_msgs.RADAR_TRACKS)
+CAN_TYPES = (CAN_FRAME,)
 
-# Raw sensor_msgs/Image encodings we convert to grey, with their channel count.
-RAW_ENCODINGS = {"mono8": 1, "8uc1": 1, "bgr8": 3, "rgb8": 3, "bgra8": 4, "rgba8": 4}
+# What reading a damaged bag raises in rosbags 0.11.9 (found by tests/core/io/test_bag_fuzz.py):
+# its own errors, and what its readers and deserialisers let through unwrapped.
+BAG_ERRORS: tuple[type[BaseException], ...] = (
+    AnyReaderError,  # open, deserialize
+    Rosbag1Error,  # rosbag1 messages(): damaged chunk or record
+    Rosbag2Error,  # rosbag2 messages(): damaged MCAP chunk or record
+    OSError,  # a path that is missing, unreadable, or a folder without metadata.yaml
+    struct.error,  # a record shorter than its fixed fields
+    apsw.Error,  # a damaged sqlite3 database page, met while reading messages
+    ValueError,  # UnicodeDecodeError of a name, type or metadata.yaml; a bad ROS 1 record type
+    AssertionError,  # rosbag1 asserts on index records and message times
+    KeyError,  # a connection id or definition encoding that the bag does not define
+    TypeError,  # a damaged QoS profile (YAML of the wrong shape); ord() at the end of a file
+    AttributeError,  # ... a QoS enum given as a list
+    MemoryError,  # an MCAP record whose length field says terabytes (read() allocates it)
+    OverflowError,  # ... or more than an index can hold
+)
+
+# Raw sensor_msgs/Image encodings read here: channels, bytes per channel, cv2 code to grey.
+RAW_ENCODINGS: dict[str, tuple[int, int, int | None]] = {
+    "mono8": (1, 1, None),
+    "8uc1": (1, 1, None),
+    "mono16": (1, 2, None),
+    "16uc1": (1, 2, None),
+    "bgr8": (3, 1, cv2.COLOR_BGR2GRAY),
+    "rgb8": (3, 1, cv2.COLOR_RGB2GRAY),
+    "bgra8": (4, 1, cv2.COLOR_BGRA2GRAY),
+    "rgba8": (4, 1, cv2.COLOR_RGBA2GRAY),
+}
+# cv2.imdecode gives BGR(A); grey conversion by channel count.
+DECODED_TO_GREY = {3: cv2.COLOR_BGR2GRAY, 4: cv2.COLOR_BGRA2GRAY}
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+JPEG_MAGIC = b"\xff\xd8\xff"
+# ISO 11898-1: a classic CAN data frame carries at most 8 bytes.
+CAN_MAX_DLC = 8
+INT64_MAX = 2**63 - 1
+NS_PER_S = 1_000_000_000
+# Stamps listed in a warning before "…".
+WARN_STAMPS = 3
+
+# --- the fields read from each message type, and what each must be ----------------------
+NUMBER, TEXT, BYTES = "a number", "a string", "a uint8 array"
+Fields: TypeAlias = dict[str, "str | Fields | list[Fields]"]
+_TIME: Fields = {"sec": NUMBER, "nanosec": NUMBER}
+_HEADER: Fields = {"stamp": _TIME, "frame_id": TEXT}
+_XY: Fields = {"x": NUMBER, "y": NUMBER}
+FIELDS_READ: dict[str, Fields] = {
+    radar_msgs.IMAGE: {
+        "header": _HEADER,
+        "height": NUMBER,
+        "width": NUMBER,
+        "encoding": TEXT,
+        "is_bigendian": NUMBER,
+        "step": NUMBER,
+        "data": BYTES,
+    },
+    radar_msgs.COMPRESSED_IMAGE: {"header": _HEADER, "format": TEXT, "data": BYTES},
+    radar_msgs.RADAR_SCAN: {
+        "header": _HEADER,
+        "returns": [
+            {"range": NUMBER, "azimuth": NUMBER, "doppler_velocity": NUMBER, "amplitude": NUMBER}
+        ],
+    },
+    radar_msgs.RADAR_TRACKS: {
+        "header": _HEADER,
+        "tracks": [{"uuid": {"uuid": BYTES}, "position": _XY, "velocity": _XY}],
+    },
+    CAN_FRAME: {
+        "header": _HEADER,
+        "id": NUMBER,
+        "is_rtr": NUMBER,
+        "is_extended": NUMBER,
+        "is_error": NUMBER,
+        "dlc": NUMBER,
+        "data": BYTES,
+    },
+}
+NUMERIC_TYPES = {"bool", "byte", "char", "float32", "float64"} | {
+    f"{sign}int{bits}" for sign in ("", "u") for bits in (8, 16, 32, 64)
+}
+
+
+def _type_name(desc: Any) -> str:
+    node, spec = desc
+    if node == Nodetype.BASE:
+        return str(spec[0])
+    if node == Nodetype.NAME:
+        return str(spec)
+    return _type_name(spec[0]) + "[]"
+
+
+_EXPECTED = {dict: "a message", list: "a message array"}
+
+
+def _is_message_array(node: Nodetype, spec: Any) -> bool:
+    return node in (Nodetype.ARRAY, Nodetype.SEQUENCE) and spec[0][0] == Nodetype.NAME
+
+
+def _is_kind(node: Nodetype, spec: Any, kind: str) -> bool:
+    if kind == BYTES:
+        return node in (Nodetype.ARRAY, Nodetype.SEQUENCE) and spec[0] == (
+            Nodetype.BASE,
+            ("uint8", 0),
+        )
+    if kind == TEXT:
+        return node == Nodetype.BASE and spec[0] == "string"
+    return node == Nodetype.BASE and spec[0] in NUMERIC_TYPES
+
+
+def _fields_problem(store: Typestore, msgtype: str, want: Fields, prefix: str) -> str | None:
+    """What keeps `msgtype`, as `store` defines it, from having the fields `want`; None if ok."""
+    if msgtype not in store.fielddefs:
+        return f"has no definition of {msgtype}"
+    have: dict[str, Any] = dict(store.fielddefs[msgtype][1])
+    for name, kind in want.items():
+        path = prefix + name
+        if name not in have:
+            return f"has no field {path}"
+        node, spec = have[name]
+        if isinstance(kind, dict) and node == Nodetype.NAME:
+            problem = _fields_problem(store, spec, kind, path + ".")
+        elif isinstance(kind, list) and _is_message_array(node, spec):
+            problem = _fields_problem(store, spec[0][1], kind[0], path + "[].")
+        elif isinstance(kind, str) and _is_kind(node, spec, kind):
+            problem = None
+        else:
+            expected = kind if isinstance(kind, str) else _EXPECTED[type(kind)]
+            return f"has {path} of type {_type_name(have[name])}, expected {expected}"
+        if problem is not None:
+            return problem
+    return None
+
+
+def _seconds(t_ns: int) -> str:
+    sign = "-" if t_ns < 0 else ""
+    sec, ns = divmod(abs(int(t_ns)), NS_PER_S)
+    return f"{sign}{sec}.{ns:09d} s"
 
 
 def _stamp(msg: Any) -> str:
     return f"{msg.header.stamp.sec}.{msg.header.stamp.nanosec:09d} s"
 
 
-def decode_image(msg: Any, msgtype: str, where: str) -> npt.NDArray[np.uint8]:
-    """(H, W) uint8 grey image from a CompressedImage (PNG/JPEG) or a raw 8-bit Image.
+def _stamps(t_ns: Sequence[int] | Int64Array) -> str:
+    shown = ", ".join(_seconds(int(t)) for t in t_ns[:WARN_STAMPS])
+    return shown + (", …" if len(t_ns) > WARN_STAMPS else "")
 
-    `where` names the topic and time stamp in errors.
+
+def _next_message(last_ns: int | None) -> str:
+    """The message after the one at `last_ns` (None: before any), in words."""
+    return "the first message" if last_ns is None else f"the message after log t={last_ns} ns"
+
+
+def _reason(err: BaseException) -> str:
+    return f"{err} ({type(err).__name__})"
+
+
+def check_mono16_bits(mono16_bits: int) -> None:
+    """Raise ValueError unless 1 <= mono16_bits <= 16."""
+    if not 1 <= mono16_bits <= 16:
+        raise ValueError(f"mono16_bits: expected 1 to 16 significant bits, got {mono16_bits}")
+
+
+def _to_8bit(img: npt.NDArray[np.uint16], bits: int) -> npt.NDArray[np.uint8]:
+    """value * 255 / (2**bits - 1), rounded and clipped to 0..255."""
+    scaled = np.rint(img.astype(np.float64) * (255.0 / (2**bits - 1)))
+    return np.clip(scaled, 0, 255).astype(np.uint8)
+
+
+def _decode_compressed(msg: Any, where: str) -> npt.NDArray[Any]:
+    """(H, W) or (H, W, 3|4) BGR(A), uint8 or uint16, from PNG or JPEG data."""
+    buf = np.asarray(msg.data, dtype=np.uint8)
+    head = buf[:8].tobytes()
+    if not (head.startswith(PNG_MAGIC) or head.startswith(JPEG_MAGIC)):
+        raise RecordingError(
+            f"{where}: cannot decode image: expected PNG or JPEG data, format {msg.format!r}, "
+            f"{buf.size} bytes starting {head!r}"
+        )
+    try:
+        img = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED)
+    except cv2.error as err:
+        raise RecordingError(f"{where}: cannot decode image ({msg.format!r}): {err}") from err
+    if img is None:
+        raise RecordingError(
+            f"{where}: cannot decode image: expected PNG or JPEG data, format {msg.format!r}, "
+            f"{buf.size} bytes that OpenCV cannot decode"
+        )
+    if img.dtype not in (np.uint8, np.uint16) or (img.ndim == 3 and img.shape[2] not in (3, 4)):
+        raise RecordingError(
+            f"{where}: expected an 8- or 16-bit grey, BGR or BGRA image, got {img.dtype} "
+            f"with shape {img.shape}"
+        )
+    if img.ndim == 3:
+        img = cv2.cvtColor(img, DECODED_TO_GREY[img.shape[2]])
+    return img
+
+
+def _decode_raw(msg: Any, where: str) -> npt.NDArray[Any]:
+    """(H, W) uint8 or uint16 grey from a raw sensor_msgs/Image."""
+    encoding = str(msg.encoding).lower()
+    if encoding not in RAW_ENCODINGS:
+        raise RecordingError(
+            f"{where}: image encoding {msg.encoding!r} not supported; "
+            f"expected one of {', '.join(RAW_ENCODINGS)}"
+        )
+    channels, depth, to_grey = RAW_ENCODINGS[encoding]
+    height, width, step = int(msg.height), int(msg.width), int(msg.step)
+    data = np.asarray(msg.data, dtype=np.uint8)
+    row_bytes = width * channels * depth
+    if height == 0 or width == 0 or step < row_bytes or data.size < step * height:
+        raise RecordingError(
+            f"{where}: expected a {width}x{height} {encoding} image of rows of at least "
+            f"{row_bytes} bytes, got step {step} and {data.size} bytes"
+        )
+    pixels = data[: step * height].reshape(height, step)[:, :row_bytes]
+    if depth == 2:
+        pairs = pixels.reshape(height, width, 2).astype(np.uint16)
+        hi, lo = (
+            (pairs[..., 0], pairs[..., 1]) if msg.is_bigendian else (pairs[..., 1], pairs[..., 0])
+        )
+        return (hi << 8) | lo
+    img = pixels.reshape(height, width, channels)
+    return img[:, :, 0] if to_grey is None else cv2.cvtColor(img, to_grey)
+
+
+def decode_image(
+    msg: Any, msgtype: str, where: str, mono16_bits: int = 16
+) -> npt.NDArray[np.uint8]:
+    """(H, W) uint8 grey image from a sensor_msgs Image or CompressedImage.
+
+    Image encodings: mono8 (8UC1), mono16 (16UC1; `is_bigendian` honoured), bgr8, rgb8, bgra8,
+    rgba8. CompressedImage: JPEG (grey or colour) or PNG (8- or 16-bit, grey or colour).
+    Colour becomes grey with OpenCV's BGR2GRAY weights; 16-bit values v become
+    round(v * 255 / (2**mono16_bits - 1)), clipped to 255. `where` names the topic and time
+    stamp in errors.
     """
+    check_mono16_bits(mono16_bits)
     if msgtype == radar_msgs.COMPRESSED_IMAGE:
-        buf = np.asarray(msg.data, dtype=np.uint8)
-        try:
-            img = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED) if buf.size else None
-        except cv2.error as err:
-            raise RecordingError(f"{where}: cannot decode image ({msg.format!r}): {err}") from err
-        if img is None:
-            raise RecordingError(
-                f"{where}: cannot decode image: expected PNG or JPEG data, format {msg.format!r}, "
-                f"{buf.size} bytes"
-            )
+        img = _decode_compressed(msg, where)
     else:
-        encoding = str(msg.encoding).lower()
-        if encoding not in RAW_ENCODINGS:
-            raise RecordingError(
-                f"{where}: image encoding {msg.encoding!r} not supported; "
-                f"expected one of {', '.join(RAW_ENCODINGS)}"
-            )
-        channels = RAW_ENCODINGS[encoding]
-        data = np.asarray(msg.data, dtype=np.uint8)
-        if msg.step < msg.width * channels or data.size < msg.step * msg.height:
-            raise RecordingError(
-                f"{where}: image of {msg.width}x{msg.height} {encoding} needs "
-                f"{msg.step * msg.height} bytes with step {msg.step}, got {data.size}"
-            )
-        rows = data[: msg.step * msg.height].reshape(msg.height, msg.step)
-        img = rows[:, : msg.width * channels].reshape(msg.height, msg.width, channels)
-        if encoding.startswith("rgb"):
-            img = img[:, :, [2, 1, 0, 3][:channels]]
-        if channels == 1:
-            img = img[:, :, 0]
-    if img.dtype != np.uint8:
-        raise RecordingError(f"{where}: expected an 8-bit image, got {img.dtype}")
-    if img.ndim == 3 and img.shape[2] == 1:
-        img = img[:, :, 0]
-    elif img.ndim == 3:
-        code = cv2.COLOR_BGRA2GRAY if img.shape[2] == 4 else cv2.COLOR_BGR2GRAY
-        img = cv2.cvtColor(img, code)
-    return np.ascontiguousarray(img)
+        img = _decode_raw(msg, where)
+    if img.dtype == np.uint16:
+        img = _to_8bit(img, mono16_bits)
+    return np.ascontiguousarray(img, dtype=np.uint8)
 
 
 class BagReader:
-    """One open bag. Not thread-safe: callers that share it guard it with a lock."""
+    """One open bag; a context manager. Not thread-safe: callers that share it use a lock."""
 
-    def __init__(self, path: Path) -> None:
-        self.path = path
-        self._reader = AnyReader([path], default_typestore=radar_msgs.typestore())
+    def __init__(self, path: Path | str) -> None:
+        self.path = Path(path)
         try:
+            self._reader = AnyReader([self.path], default_typestore=radar_msgs.typestore())
             self._reader.open()
-        except (AnyReaderError, OSError) as err:
-            raise RecordingError(f"{path}: cannot open ROS bag: {err}") from err
+        except BAG_ERRORS as err:
+            raise RecordingError(
+                f"{self.path}: cannot open as a ROS bag (expected a ROS 1 .bag file, a ROS 2 "
+                f"bag folder with metadata.yaml, or a .db3 or .mcap file): {_reason(err)}"
+            ) from err
+        self._open = True
+        for c in self._reader.connections:
+            if not (isinstance(c.topic, str) and isinstance(c.msgtype, str)):
+                self.close()
+                raise RecordingError(
+                    f"{self.path}: connection {c.id} has topic {c.topic!r} of type {c.msgtype!r}; "
+                    "expected a topic name and a message type name"
+                )
 
     def close(self) -> None:
-        self._reader.close()
+        if self._open:
+            self._open = False
+            self._reader.close()
+
+    def __enter__(self) -> BagReader:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
 
     @property
     def topics(self) -> dict[str, str]:
@@ -110,7 +345,10 @@ class BagReader:
         return ", ".join(f"{t} ({m})" for t, m in sorted(self.topics.items())) or "none"
 
     def connection(self, topic: str | None, msgtypes: Sequence[str], role: str) -> Connection:
-        """The connection of `topic`, or the only topic of one of `msgtypes` when None."""
+        """The connection of `topic`, or the only topic of one of `msgtypes` when None.
+
+        Checks that the bag defines the message type with the fields this module reads.
+        """
         conns = self._reader.connections
         if topic is not None:
             found = [c for c in conns if c.topic == topic]
@@ -123,93 +361,196 @@ class BagReader:
                     f"{self.path}: {role} topic {topic!r} has type {found[0].msgtype}; "
                     f"expected {' or '.join(msgtypes)}"
                 )
-            return found[0]
-        candidates = sorted({c.topic for c in conns if c.msgtype in msgtypes})
-        if len(candidates) != 1:
-            what = "several" if candidates else "no"
-            raise RecordingError(
-                f"{self.path}: {what} {role} topics of type {' or '.join(msgtypes)} "
-                f"({', '.join(candidates) or 'none'}); name one in recording.yaml. "
-                f"Topics in the bag: {self._listing()}"
+            conn = found[0]
+        else:
+            candidates = sorted({c.topic for c in conns if c.msgtype in msgtypes})
+            if len(candidates) != 1:
+                what = "several" if candidates else "no"
+                raise RecordingError(
+                    f"{self.path}: {what} {role} topics of type {' or '.join(msgtypes)} "
+                    f"({', '.join(candidates) or 'none'}); name one in recording.yaml. "
+                    f"Topics in the bag: {self._listing()}"
+                )
+            conn = next(c for c in conns if c.topic == candidates[0])
+        if conn.msgtype in FIELDS_READ:
+            problem = _fields_problem(
+                self._reader.typestore, conn.msgtype, FIELDS_READ[conn.msgtype], ""
             )
-        return next(c for c in conns if c.topic == candidates[0])
+            if problem is not None:
+                raise RecordingError(
+                    f"{self.path}: {role} topic {conn.topic}: the bag's {conn.msgtype} {problem}"
+                )
+        return conn
 
+    # --- raw access, every library error made a RecordingError ----------------------------
+    def _raw(
+        self, conn: Connection, start: int | None = None, stop: int | None = None
+    ) -> Iterator[tuple[int, bytes]]:
+        """(log time ns, serialised message) of every message of `conn`'s topic, bag order."""
+        stream = [
+            c
+            for c in self._reader.connections
+            if (c.topic, c.msgtype) == (conn.topic, conn.msgtype)
+        ]
+        last: int | None = None
+        try:
+            for _, t_ns, raw in self._reader.messages(stream or [conn], start, stop):
+                # sqlite3 columns hold whatever a damaged page says
+                if not (isinstance(t_ns, int) and 0 <= t_ns <= INT64_MAX):
+                    raise RecordingError(
+                        f"{self.path}: {conn.topic}: {_next_message(last)} has log time "
+                        f"{t_ns!r} ns; expected an integer from 0 to {INT64_MAX}"
+                    )
+                if not isinstance(raw, bytes | memoryview):
+                    raise RecordingError(
+                        f"{self.path}: {conn.topic}: message at log t={t_ns} ns has data of "
+                        f"type {type(raw).__name__}; expected bytes"
+                    )
+                last = t_ns
+                yield t_ns, raw
+        except BAG_ERRORS as err:
+            raise RecordingError(
+                f"{self.path}: {conn.topic}: cannot read {_next_message(last)}: {_reason(err)}"
+            ) from err
+
+    def _deserialize(self, raw: bytes, conn: Connection, t_ns: int) -> Any:
+        try:
+            return self._reader.deserialize(raw, conn.msgtype)
+        except BAG_ERRORS as err:
+            raise RecordingError(
+                f"{self.path}: {conn.topic}: message at log t={t_ns} ns is not a valid "
+                f"{conn.msgtype}: {_reason(err)}"
+            ) from err
+
+    def _messages(self, conn: Connection) -> Iterator[tuple[int, Any]]:
+        for t_ns, raw in self._raw(conn):
+            yield t_ns, self._deserialize(raw, conn, t_ns)
+
+    # --- public reading ----------------------------------------------------------------
     def log_times_ns(self, conn: Connection) -> Int64Array:
         """(N,) int64 receive times of every message of `conn`, in bag order."""
-        try:
-            return np.fromiter((t for _, t, _ in self._reader.messages([conn])), dtype=np.int64)
-        except (AnyReaderError, OSError) as err:
-            raise RecordingError(f"{self.path}: cannot read topic {conn.topic}: {err}") from err
+        return np.fromiter((t for t, _ in self._raw(conn)), dtype=np.int64)
 
     def read_at(self, conn: Connection, t_ns: int, occurrence: int = 0) -> Any:
         """The `occurrence`-th message of `conn` received at exactly `t_ns`, deserialised."""
-        try:
-            found = [raw for _, _, raw in self._reader.messages([conn], start=t_ns, stop=t_ns + 1)]
-            if len(found) <= occurrence:
-                raise RecordingError(f"{self.path}: {conn.topic}: no message at t={t_ns} ns")
-            return self._reader.deserialize(found[occurrence], conn.msgtype)
-        except (AnyReaderError, OSError, ValueError) as err:
+        found = [raw for _, raw in self._raw(conn, t_ns, t_ns + 1)]
+        if len(found) <= occurrence:
             raise RecordingError(
-                f"{self.path}: {conn.topic}: message at t={t_ns} ns cannot be read: {err}"
-            ) from err
-
-    def read_radar(self, conn: Connection, offset_ns: int = 0) -> RadarScans:
-        """Every RadarScan or RadarTracks message of `conn`; `offset_ns` added to stamps."""
-        times: list[int] = []
-        starts = [0]
-        cols: dict[str, list[float]] = {"r": [], "a": [], "rr": [], "amp": []}
-        ids: list[int] = []
-        try:
-            for _, t_ns, raw in self._reader.messages([conn]):
-                msg: Any = self._reader.deserialize(raw, conn.msgtype)
-                if conn.msgtype == radar_msgs.RADAR_SCAN:
-                    for ret in msg.returns:
-                        cols["r"].append(ret.range)
-                        cols["a"].append(ret.azimuth)
-                        cols["rr"].append(ret.doppler_velocity)
-                        cols["amp"].append(ret.amplitude)
-                        ids.append(-1)
-                else:
-                    for trk in msg.tracks:
-                        x, y = trk.position.x, trk.position.y
-                        r = math.hypot(x, y)
-                        cols["r"].append(r)
-                        cols["a"].append(math.atan2(y, x))
-                        rr = (x * trk.velocity.x + y * trk.velocity.y) / r if r > 0 else 0.0
-                        cols["rr"].append(rr)
-                        cols["amp"].append(0.0)
-                        ids.append(int.from_bytes(bytes(trk.uuid.uuid[:8]), "little") & (2**63 - 1))
-                times.append(t_ns + offset_ns)
-                starts.append(len(ids))
-        except (AnyReaderError, OSError, ValueError) as err:
-            raise RecordingError(
-                f"{self.path}: cannot read radar topic {conn.topic}: {err}"
-            ) from err
-        order = np.argsort(np.asarray(times, dtype=np.int64), kind="stable")
-        if np.any(order != np.arange(len(order))):
-            raise RecordingError(
-                f"{self.path}: radar topic {conn.topic}: scans are not in time order"
+                f"{self.path}: {conn.topic}: no message at t={t_ns} ns "
+                f"(expected at least {occurrence + 1}, found {len(found)})"
             )
-        f64 = np.float64
+        return self._deserialize(found[occurrence], conn, t_ns)
+
+    def read_radar(
+        self, conn: Connection, offset_ns: int = 0, *, warn: Callable[[str], None]
+    ) -> RadarScans:
+        """Every RadarScan or RadarTracks message of `conn`; `offset_ns` added to the stamps.
+
+        Tracks become polar: range and azimuth (positive left) of the position, range rate
+        (positive receding) the velocity along the line of sight, track id the first 8 bytes
+        of the UUID (little-endian, sign bit cleared), amplitude 0.
+
+        Repairs what real recordings get wrong, each kind reported once through `warn`: returns
+        with a non-finite range, azimuth or velocity are dropped; scans stamped outside the
+        main body of the stream (`timeline.main_block`, e.g. 1970 amid a drive) are dropped;
+        scans out of time order are sorted.
+        """
+        where = f"{self.path}: radar topic {conn.topic}"
+        times: list[int] = []
+        scan_of_row: list[int] = []
+        rows: list[tuple[float, float, float, float]] = []
+        ids: list[int] = []
+        for t_ns, msg in self._messages(conn):
+            if conn.msgtype == radar_msgs.RADAR_SCAN:
+                for ret in msg.returns:
+                    rows.append((ret.range, ret.azimuth, ret.doppler_velocity, ret.amplitude))
+                    ids.append(-1)
+            else:
+                for trk in msg.tracks:
+                    x, y = trk.position.x, trk.position.y
+                    r = math.hypot(x, y)
+                    rr = (x * trk.velocity.x + y * trk.velocity.y) / r if r > 0 else 0.0
+                    rows.append((r, math.atan2(y, x), rr, 0.0))
+                    ids.append(int.from_bytes(bytes(trk.uuid.uuid[:8]), "little") & INT64_MAX)
+            scan_of_row.extend([len(times)] * (len(rows) - len(scan_of_row)))
+            times.append(t_ns)
+        t = np.asarray(times, dtype=np.int64)
+        scan = np.asarray(scan_of_row, dtype=np.int64)
+        values = np.asarray(rows, dtype=np.float64).reshape(-1, 4)
+
+        finite = np.all(np.isfinite(values[:, :3]), axis=1)
+        if not finite.all():
+            bad_scans = t[np.unique(scan[~finite])]
+            warn(
+                f"{where}: {np.count_nonzero(~finite)} return(s) with a non-finite range, "
+                f"azimuth or velocity dropped, in scans at log t = {_stamps(bad_scans)}"
+            )
+        in_block = main_block(t)
+        if not in_block.all():
+            warn(
+                f"{where}: {np.count_nonzero(~in_block)} scan(s) stamped away from the rest of "
+                f"the stream dropped, at log t = {_stamps(t[~in_block])}"
+            )
+        kept = np.flatnonzero(in_block)
+        late = np.diff(t[kept]) < 0
+        if late.any():
+            warn(
+                f"{where}: {np.count_nonzero(late)} scan(s) stamped earlier than the scan before, "
+                f"sorted; at log t = {_stamps(t[kept][1:][late])}"
+            )
+        order = kept[np.argsort(t[kept], kind="stable")]
+        rank = np.full(len(t), -1, dtype=np.int64)
+        rank[order] = np.arange(len(order))
+        row_idx = np.flatnonzero(finite & in_block[scan])
+        row_idx = row_idx[np.argsort(rank[scan[row_idx]], kind="stable")]
+        counts = np.bincount(rank[scan[row_idx]], minlength=len(order))
         return RadarScans(
-            t_ns=np.asarray(times, dtype=np.int64),
-            start=np.asarray(starts, dtype=np.int64),
-            range_m=np.asarray(cols["r"], dtype=f64),
-            azimuth_rad=np.asarray(cols["a"], dtype=f64),
-            range_rate_mps=np.asarray(cols["rr"], dtype=f64),
-            amplitude=np.asarray(cols["amp"], dtype=f64),
-            track_id=np.asarray(ids, dtype=np.int64),
+            t_ns=t[order] + offset_ns,
+            start=np.concatenate(([0], np.cumsum(counts))).astype(np.int64),
+            range_m=values[row_idx, 0],
+            azimuth_rad=values[row_idx, 1],
+            range_rate_mps=values[row_idx, 2],
+            amplitude=values[row_idx, 3],
+            track_id=np.asarray(ids, dtype=np.int64)[row_idx],
         )
+
+    def can_frames(self, conn: Connection) -> Iterator[CanFrame]:
+        """The data frames of a can_msgs/Frame topic, in bag order.
+
+        t_ns: the log time; data: the first `dlc` bytes; channel: the header's frame_id, None
+        when empty. Remote (rtr) and error frames are skipped; dlc > 8 raises RecordingError.
+        """
+        for t_ns, msg in self._messages(conn):
+            if msg.is_rtr or msg.is_error:
+                continue
+            dlc, data = int(msg.dlc), bytes(np.asarray(msg.data, dtype=np.uint8))
+            if dlc > min(CAN_MAX_DLC, len(data)):
+                raise RecordingError(
+                    f"{self.path}: {conn.topic} at {_stamp(msg)} (log t={t_ns} ns): CAN frame "
+                    f"with dlc {dlc}; expected at most {min(CAN_MAX_DLC, len(data))} data bytes"
+                )
+            yield CanFrame(
+                t_ns=t_ns,
+                arbitration_id=int(msg.id),
+                is_extended=bool(msg.is_extended),
+                data=data[:dlc],
+                channel=str(msg.header.frame_id) or None,
+            )
 
 
 class CameraStream:
     """Random access to the images of one camera topic (indexed once, decoded on demand).
 
-    times_ns: (N,) int64 camera stamps (log times + offset), in bag order.
+    times_ns: (N,) int64 camera stamps (log times + offset), in bag order. mono16_bits: the
+    significant bits of 16-bit images (see decode_image).
     """
 
-    def __init__(self, bag: BagReader, topic: str | None, offset_ns: int = 0) -> None:
+    def __init__(
+        self, bag: BagReader, topic: str | None, offset_ns: int = 0, mono16_bits: int = 16
+    ) -> None:
+        check_mono16_bits(mono16_bits)
         self.bag = bag
+        self.mono16_bits = mono16_bits
         self.conn = bag.connection(topic, CAMERA_TYPES, "camera")
         log_ns = bag.log_times_ns(self.conn)
         if len(log_ns) == 0:
@@ -234,4 +575,4 @@ class CameraStream:
         t = int(self._log_ns[i])
         msg = self.bag.read_at(self.conn, t, int(self._occurrence[i]))
         where = f"{self.bag.path}: {self.conn.topic} at {_stamp(msg)} (log t={t} ns)"
-        return decode_image(msg, self.conn.msgtype, where)
+        return decode_image(msg, self.conn.msgtype, where, self.mono16_bits)

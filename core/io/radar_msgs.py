@@ -1,9 +1,14 @@
-"""A rosbags typestore that knows the official ROS 2 `radar_msgs` messages.
+"""A rosbags typestore that knows the official ROS 2 `radar_msgs` and `can_msgs` messages.
 
 The definitions are those of ros-perception/radar_msgs (branch ros2): RadarReturn and
-RadarScan for raw detections, RadarTrack and RadarTracks for tracked objects. The ROS 2
+RadarScan for raw detections, RadarTrack and RadarTracks for tracked objects; and of
+ros-industrial/ros_canopen (branch dashing-devel): can_msgs/Frame, one CAN frame. The ROS 2
 Humble store already holds their dependencies (std_msgs/Header, geometry_msgs/Point and
 Vector3, unique_identifier_msgs/UUID).
+
+Notes:
+    Bags that embed their message definitions (ROS 1 always, ROS 2 from rosbag2 version 8)
+    are read with those; this store serves the older ROS 2 bags that embed none.
 """
 
 from __future__ import annotations
@@ -19,6 +24,7 @@ RADAR_TRACK = "radar_msgs/msg/RadarTrack"
 RADAR_TRACKS = "radar_msgs/msg/RadarTracks"
 COMPRESSED_IMAGE = "sensor_msgs/msg/CompressedImage"
 IMAGE = "sensor_msgs/msg/Image"
+CAN_FRAME = "can_msgs/msg/Frame"
 
 RADAR_MSG_DEFINITIONS: dict[str, str] = {
     RADAR_RETURN: """
@@ -51,12 +57,21 @@ float32[6] size_covariance
 std_msgs/Header header
 radar_msgs/RadarTrack[] tracks
 """,
+    CAN_FRAME: """
+std_msgs/Header header
+uint32 id
+bool is_rtr
+bool is_extended
+bool is_error
+uint8 dlc
+uint8[8] data
+""",
 }
 
 
 @cache
 def typestore() -> Typestore:
-    """The ROS 2 Humble typestore with the radar_msgs types registered (built once)."""
+    """The ROS 2 Humble typestore with the radar_msgs and can_msgs types registered (built once)."""
     store = get_typestore(Stores.ROS2_HUMBLE)
     types = {}
     for name, text in RADAR_MSG_DEFINITIONS.items():

@@ -29,6 +29,7 @@ import can
 import cv2
 import numpy as np
 import numpy.typing as npt
+from rosbags.typesys.store import Typestore
 
 from core.io import radar_msgs
 from core.io.calibration import Calibration, save_calibration
@@ -71,6 +72,31 @@ SPEED_SIGNAL = SignalMapping("SPEED", "SPEED", "km/h", SPEED_UNITS_TO_MPS["km/h"
 YAW_RATE_SIGNAL = SignalMapping("KINEMATICS", "YAW_RATE", "deg/s", YAW_RATE_UNITS_TO_RADPS["deg/s"])
 SPEED_COUNTER = "ENCODER"
 COUNTER_MODULO = 256
+
+
+def ros_header(store: Typestore, t_ns: int, frame_id: str) -> Any:
+    """A std_msgs/Header stamped `t_ns` (ns, >= 0)."""
+    sec, nanosec = divmod(int(t_ns), 1_000_000_000)
+    stamp = store.types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec)
+    return store.types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame_id)
+
+
+def png_image_message(store: Typestore, t_ns: int, image: npt.NDArray[np.uint8]) -> bytes:
+    """A serialised (CDR) sensor_msgs/CompressedImage holding `image` as PNG, stamped `t_ns`.
+
+    image: (H, W) uint8 grey. Header stamp = `t_ns`, which the bag also takes as log time.
+    """
+    if image.dtype != np.uint8 or image.ndim != 2:
+        raise ValueError(f"image: expected (H, W) uint8 grey, got {image.dtype} {image.shape}")
+    ok, png = cv2.imencode(".png", image, PNG_PARAMS)
+    if not ok:
+        raise RecordingError(f"image at t={t_ns} ns: cannot be encoded as PNG")
+    msg = store.types[radar_msgs.COMPRESSED_IMAGE](
+        header=ros_header(store, t_ns, CAMERA_FRAME_ID),
+        format=PNG_FORMAT,
+        data=np.asarray(png, dtype=np.uint8).ravel(),
+    )
+    return bytes(store.serialize_cdr(msg, radar_msgs.COMPRESSED_IMAGE))
 
 
 def vehicle_dbc_path() -> Path:
@@ -133,12 +159,6 @@ class RecordingWriter:
         self.close()
 
     # --- messages -----------------------------------------------------------------------
-    def _header(self, t_ns: int, frame_id: str) -> Any:
-        types = self._store.types
-        sec, nanosec = divmod(int(t_ns), 1_000_000_000)
-        stamp = types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec)
-        return types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame_id)
-
     def add_image(self, t_ns: int, image: npt.NDArray[np.uint8]) -> None:
         """Add a camera frame: (H, W) uint8 grey, the calibration's size; stored as PNG."""
         i = self.calibration.camera.intrinsics
@@ -147,18 +167,7 @@ class RecordingWriter:
                 f"image: expected ({i.height_px}, {i.width_px}) uint8 grey as the calibration "
                 f"says, got {image.dtype} {image.shape}"
             )
-        ok, png = cv2.imencode(".png", image, PNG_PARAMS)
-        if not ok:
-            raise RecordingError(f"{self.out_dir}: cannot encode image at t={t_ns} ns as PNG")
-        cls = self._store.types[radar_msgs.COMPRESSED_IMAGE]
-        msg = cls(
-            header=self._header(t_ns, CAMERA_FRAME_ID),
-            format=PNG_FORMAT,
-            data=np.asarray(png, dtype=np.uint8).ravel(),
-        )
-        self._bag.write(
-            CAMERA_TOPIC, int(t_ns), self._store.serialize_cdr(msg, radar_msgs.COMPRESSED_IMAGE)
-        )
+        self._bag.write(CAMERA_TOPIC, int(t_ns), png_image_message(self._store, t_ns, image))
 
     def add_radar_scan(self, t_ns: int, targets: Sequence[RadarTarget]) -> None:
         """Add a radar scan: range, azimuth, range rate and amplitude of each target (float32).
@@ -178,7 +187,7 @@ class RecordingWriter:
             for t in targets
         ]
         msg = self._store.types[radar_msgs.RADAR_SCAN](
-            header=self._header(t_ns, RADAR_FRAME_ID), returns=returns
+            header=ros_header(self._store, t_ns, RADAR_FRAME_ID), returns=returns
         )
         self._bag.write(
             RADAR_TOPIC, int(t_ns), self._store.serialize_cdr(msg, radar_msgs.RADAR_SCAN)
