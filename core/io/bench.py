@@ -113,9 +113,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"seek median ({SEEKS} random)    {np.median(seeks_ms):8.2f} ms")
         print(f"seek 95th percentile        {np.percentile(seeks_ms, 95):8.2f} ms")
         print(f"rss while seeking, max      {peak:8.1f} MB")
-    print(
-        f"peak rss of the process     {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:8.1f} MB"
-    )
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"peak rss of the process     {peak_mb:8.1f} MB")
     tmp.cleanup()
     return 0
 

@@ -28,11 +28,19 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from cantools.database.can import Database
 
 from core.io.bag import CAMERA_TYPES, CAN_TYPES, RADAR_TYPES, BagReader
 from core.io.can_radar import RadarCanDecoder
 from core.io.canframe import CanFrame
-from core.io.canlog import VehicleSignalDecoder, VehicleSignals, decode_frames, iter_log_frames, load_dbc
+from core.io.canlog import (
+    FrameDecoder,
+    VehicleSignalDecoder,
+    VehicleSignals,
+    decode_frames,
+    iter_log_frames,
+    load_dbc,
+)
 from core.io.errors import RecordingError
 from core.io.manifest import MANIFEST_NAME, CanBus, Manifest, RadarCanSource
 from core.io.radarscans import RadarScans
@@ -50,7 +58,8 @@ class DriveIndex:
     camera_log_ns: (N,) bag log time of each frame (what the bag is searched by);
     camera_occurrence: (N,) which of the messages at that same log time it is (bag order);
     camera_t_ns: (N,) frame stamps on the recording clock (camera offset applied);
-    camera_skipped: frames skipped because their stamps are outliers; radar: all scans (None without radar); vehicle: speed and yaw rate;
+    camera_skipped: frames skipped because their stamps are outliers;
+    radar: all scans (None without radar); vehicle: speed and yaw rate;
     warnings: what was skipped or repaired while building, in plain words; build_s: seconds
     the build took (not the load).
     """
@@ -112,23 +121,27 @@ def _decode_can(
 ) -> tuple[VehicleSignals, RadarScans | None]:
     """Vehicle signals and radar-over-CAN, one pass over each CAN source."""
     m = bags.manifest
-    by_bus: dict[tuple[str | None, str | None, str | None], list[Any]] = {}
+    by_bus: dict[tuple[str | None, str | None, str | None], list[FrameDecoder]] = {}
     vehicle: VehicleSignalDecoder | None = None
     radar: RadarCanDecoder | None = None
 
-    def database(bus: CanBus) -> Any:
+    def database(bus: CanBus) -> Database:
         return load_dbc([m.resolve(d) for d in bus.dbc])
 
+    def where(section: str, bus: CanBus) -> str:
+        source = f"log {bus.log}" if bus.log is not None else f"bag {bus.bag}"
+        return f"{m.folder / MANIFEST_NAME}: {section} ({source}, DBC {', '.join(bus.dbc)})"
+
     if m.can is not None:
-        where = f"{m.folder}: can ({m.can.bus.log or m.can.bus.bag})"
         vehicle = VehicleSignalDecoder(
-            database(m.can.bus), m.can, where, offset_ns=m.time_offsets.can_ns
+            database(m.can.bus), m.can, where("can", m.can.bus), offset_ns=m.time_offsets.can_ns
         )
         by_bus.setdefault((m.can.bus.log, m.can.bus.bag, m.can.bus.topic), []).append(vehicle)
     if isinstance(m.radar, RadarCanSource):
         bus = m.radar.bus
-        where = f"{m.folder}: radar ({bus.log or bus.bag})"
-        radar = RadarCanDecoder(database(bus), m.radar, where, offset_ns=m.time_offsets.radar_ns)
+        radar = RadarCanDecoder(
+            database(bus), m.radar, where("radar.can", bus), offset_ns=m.time_offsets.radar_ns
+        )
         by_bus.setdefault((bus.log, bus.bag, bus.topic), []).append(radar)
     for decoders in by_bus.values():
         decode_frames(_can_frames(bags, decoders[0].bus, warn), decoders)
@@ -252,7 +265,7 @@ def read_index(path: Path) -> DriveIndex:
         vehicle = _unflatten(VehicleSignals, "vehicle.", arrays, meta)
         radar = _unflatten(RadarScans, "radar.", arrays, meta) if meta["has_radar"] else None
         meta = {**meta, "radar": radar, "vehicle": vehicle, "warnings": tuple(meta["warnings"])}
-        return _unflatten(DriveIndex, "", arrays, meta)  # type: ignore[no-any-return]
+        return _unflatten(DriveIndex, "", arrays, meta)
 
 
 def load_index(manifest: Manifest, use_cache: bool = True) -> tuple[DriveIndex, bool]:
