@@ -23,3 +23,9 @@ def realdata() -> Path:
     if os.environ.get("REQUIRE_REAL_DATA") == "1":
         pytest.fail(message + " and REQUIRE_REAL_DATA=1 is set")
     pytest.skip(message)
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _index_cache_in_a_temporary_folder(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Drive caches recording indexes; tests keep them out of the user's cache folder."""
+    os.environ["FUSIONSCOPE_CACHE_DIR"] = str(tmp_path_factory.mktemp("fusionscope-cache"))

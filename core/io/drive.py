@@ -1,45 +1,64 @@
 """Drive: random access to the frames of a recording folder, lazy and cached.
 
     with Drive("recordings/highway") as drive:
-        frame = drive.frame(10)      # FrameInput: image, radar targets, speed, yaw rate
+        frame = drive.frame(10)      # FrameInput: image, radar targets, speed, yaw rate, ego
         truth = drive.truth(10)      # FrameTruth or None
 
-Opening validates the whole recording (manifest, calibration, topics and their types, CAN
-signals, the first image) and decodes radar and CAN completely (they are small); images are
-decoded on demand and the last few are kept.
+Opening reads the manifest and calibration and the recording's index (camera stamps, radar
+scans, CAN signals; see core.io.index, cached on disk after the first open), and decodes the
+first image to check it against the calibration. Images are decoded on demand and kept in an
+LRU cache bounded in bytes.
+
+Time alignment, per camera frame at stamp t:
+    radar: the scan nearest t within the manifest's max_radar_skew_ms (default half the
+        radar's median scan period), else none (FrameInput.radar_t_ns is None);
+    speed, yaw rate: linear between CAN samples at t (held past the ends); without CAN, the
+        manifest's assumptions, else NaN;
+    ego: motion since the previous frame, paper 000 eq. 3-5 chained over every CAN sample in
+        between (core.ego.integrate); None for the first frame and without speed.
 """
 
 from __future__ import annotations
 
+import math
 import threading
+import time
 from collections import OrderedDict
 from pathlib import Path
 from types import TracebackType
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from core.camera import CameraModel
-from core.io.bag import RADAR_TYPES, BagReader, CameraStream
+from core.ego import EgoMotion, integrate, step
+from core.io.bag import CAMERA_TYPES, BagReader, decode_image
 from core.io.calibration import Calibration, load_calibration
-from core.io.canlog import VehicleSignals, read_vehicle_signals
+from core.io.canlog import VehicleSignals
 from core.io.errors import RecordingError
 from core.io.frame import FrameInput, RadarTarget
 from core.io.groundtruth import FrameTruth, read_groundtruth
-from core.io.manifest import Manifest, RadarCanSource, load_manifest
+from core.io.index import DriveIndex, load_index
+from core.io.manifest import Manifest, load_manifest
 from core.io.radarscans import RadarScans
 
-DEFAULT_CACHE_FRAMES = 16
+DEFAULT_CACHE_BYTES = 64 * 2**20
+NS_PER_MS = 1_000_000
 
 
 class Drive:
     """An open recording. Thread-safe: frame() may be called from any thread.
 
-    times_ns: (N,) int64 camera stamps on the recording clock (camera offset applied).
-    Without a CAN section in the manifest, speed_mps and yaw_rate_radps of every frame are NaN.
+    times_ns: (N,) int64 camera stamps on the recording clock (camera offset applied), in
+    time order. warnings: what was skipped or repaired on reading, in plain words.
+    open_s: seconds the open took; index_cached: whether the index came from the cache.
     """
 
-    def __init__(self, path: Path | str, cache_frames: int = DEFAULT_CACHE_FRAMES) -> None:
+    def __init__(
+        self, path: Path | str, cache_bytes: int = DEFAULT_CACHE_BYTES, use_cache: bool = True
+    ) -> None:
+        started = time.perf_counter()
         self.path = Path(path)
         self.manifest: Manifest = load_manifest(self.path)
         m = self.manifest
@@ -47,30 +66,17 @@ class Drive:
         self.calibration: Calibration = load_calibration(m.resolve(m.calibration))
         self._lock = threading.Lock()
         self._cache: OrderedDict[int, FrameInput] = OrderedDict()
-        self._cache_frames = max(1, cache_frames)
-        self._bags: dict[Path, BagReader] = {}
+        self._cache_bytes = max(0, cache_bytes)
+        self._cached_bytes = 0
+        self.index: DriveIndex
+        self.index, self.index_cached = load_index(m, use_cache)
+        self.times_ns: npt.NDArray[np.int64] = self.index.camera_t_ns
+        self.radar: RadarScans | None = self.index.radar
+        self.vehicle_signals: VehicleSignals = self.index.vehicle
+        self.warnings: tuple[str, ...] = self.index.warnings
+        self._bag: BagReader | None = BagReader(m.resolve(m.camera.bag))
         try:
-            self._camera = CameraStream(
-                self._bag(m.camera.bag), m.camera.topic, m.time_offsets.camera_ns
-            )
-            self.times_ns: npt.NDArray[np.int64] = self._camera.times_ns
-            self.radar: RadarScans | None = None
-            if isinstance(m.radar, RadarCanSource):
-                raise RecordingError(f"{self.path}: radar over CAN is not read yet")
-            if m.radar is not None:
-                bag = self._bag(m.radar.bag)
-                conn = bag.connection(m.radar.topic, RADAR_TYPES, "radar")
-                self.radar = bag.read_radar(conn, m.time_offsets.radar_ns)
-            self.vehicle_signals = VehicleSignals.empty()
-            if m.can is not None and m.can.bus.log is not None:
-                self.vehicle_signals = read_vehicle_signals(
-                    m.resolve(m.can.bus.log),
-                    [m.resolve(d) for d in m.can.bus.dbc],
-                    m.can.speed,
-                    m.can.yaw_rate,
-                    channel=m.can.bus.channel,
-                    offset_ns=m.time_offsets.can_ns,
-                )
+            self._conn = self._bag.connection(m.camera.topic, CAMERA_TYPES, "camera")
             self._truth: dict[int, FrameTruth] = {}
             if m.groundtruth is not None:
                 self._truth = {f.index: f for f in read_groundtruth(m.resolve(m.groundtruth))}
@@ -78,20 +84,16 @@ class Drive:
         except BaseException:
             self.close()
             raise
-
-    def _bag(self, relative: str) -> BagReader:
-        path = self.manifest.resolve(relative)
-        if path not in self._bags:
-            self._bags[path] = BagReader(path)
-        return self._bags[path]
+        self.open_s = time.perf_counter() - started
 
     # --- lifetime -----------------------------------------------------------------------
     def close(self) -> None:
         with self._lock:
-            for bag in self._bags.values():
-                bag.close()
-            self._bags.clear()
+            if self._bag is not None:
+                self._bag.close()
+                self._bag = None
             self._cache.clear()
+            self._cached_bytes = 0
 
     def __enter__(self) -> Drive:
         return self
@@ -134,19 +136,32 @@ class Drive:
         """Ground truth of frame `i`, None when the recording has none for it."""
         return self._truth.get(self._check_index(i))
 
-    def radar_at(self, t_ns: int) -> tuple[tuple[RadarTarget, ...], int | None]:
-        """Targets of the scan nearest `t_ns` within half the median radar period, its stamp.
+    @property
+    def max_radar_skew_ns(self) -> float:
+        """The largest camera-radar time difference accepted for a frame's radar scan."""
+        if self.manifest.max_radar_skew_ms is not None:
+            return self.manifest.max_radar_skew_ms * NS_PER_MS
+        return self.radar.median_period_ns / 2 if self.radar is not None else 0.0
 
-        ((), None) when no scan is that near.
-        """
+    def radar_scan_near(self, t_ns: int) -> int | None:
+        """Index of the radar scan nearest `t_ns` within max_radar_skew_ns, None if none."""
         scans = self.radar
         if scans is None or len(scans.t_ns) == 0:
-            return (), None
+            return None
         k = int(np.searchsorted(scans.t_ns, t_ns))
         near = [j for j in (k - 1, k) if 0 <= j < len(scans.t_ns)]
         j = min(near, key=lambda j: abs(int(scans.t_ns[j]) - t_ns))
-        if abs(int(scans.t_ns[j]) - t_ns) > scans.median_period_ns / 2:
+        return j if abs(int(scans.t_ns[j]) - t_ns) <= self.max_radar_skew_ns else None
+
+    def radar_at(self, t_ns: int) -> tuple[tuple[RadarTarget, ...], int | None]:
+        """Targets of the scan nearest `t_ns` (see radar_scan_near) and its stamp.
+
+        ((), None) when no scan is that near.
+        """
+        j = self.radar_scan_near(t_ns)
+        if j is None or self.radar is None:
             return (), None
+        scans = self.radar
         mount = self.calibration.radar_mount
         rows = range(int(scans.start[j]), int(scans.start[j + 1]))
         targets = tuple(
@@ -164,16 +179,49 @@ class Drive:
         )
         return targets, int(scans.t_ns[j])
 
+    def speed_at(self, t_ns: int) -> float:
+        """Speed (m/s) at `t_ns`: from CAN, else the manifest's assumption, else NaN."""
+        if len(self.vehicle_signals.speed_t_ns):
+            return float(self.vehicle_signals.speed_at(t_ns))
+        assumed = self.manifest.assumptions.speed_mps
+        return math.nan if assumed is None else assumed
+
+    def yaw_rate_at(self, t_ns: int) -> float:
+        """Yaw rate (rad/s, positive left) at `t_ns`: from CAN, else assumed, else NaN."""
+        if len(self.vehicle_signals.yaw_rate_t_ns):
+            return float(self.vehicle_signals.yaw_rate_at(t_ns))
+        assumed = self.manifest.assumptions.yaw_rate_radps
+        return math.nan if assumed is None else assumed
+
+    def ego_between(self, t0_ns: int, t1_ns: int) -> EgoMotion | None:
+        """The car's motion from t0_ns to t1_ns (see core.ego), None without speed or yaw rate."""
+        v = self.vehicle_signals
+        if len(v.speed_t_ns) and len(v.yaw_rate_t_ns):
+            return integrate(
+                t0_ns, t1_ns, v.speed_t_ns, v.speed_mps, v.yaw_rate_t_ns, v.yaw_rate_radps
+            )
+        speed, yaw_rate = self.speed_at(t0_ns), self.yaw_rate_at(t0_ns)
+        if math.isnan(speed) or math.isnan(yaw_rate):
+            return None
+        return step(speed, yaw_rate, (t1_ns - t0_ns) / 1e9)
+
+    def _image(self, i: int) -> npt.NDArray[np.uint8]:
+        """Decode frame `i`'s image (the caller holds the lock)."""
+        if self._bag is None:
+            raise RecordingError(f"{self.path}: the drive is closed")
+        t = int(self.index.camera_log_ns[i])
+        msg: Any = self._bag.read_at(self._conn, t, int(self.index.camera_occurrence[i]))
+        where = f"{self._bag.path}: {self._conn.topic} at {t / 1e9:.9f} s (frame {i})"
+        return decode_image(msg, self._conn.msgtype, where, self.manifest.camera.mono16_bits)
+
     def frame(self, i: int) -> FrameInput:
-        """Frame `i`: image, the nearest radar scan, speed and yaw rate at the camera stamp."""
+        """Frame `i`: image, the nearest radar scan, speed, yaw rate and ego motion."""
         i = self._check_index(i)
         with self._lock:
             if i in self._cache:
                 self._cache.move_to_end(i)
                 return self._cache[i]
-            if not self._bags:
-                raise RecordingError(f"{self.path}: the drive is closed")
-            image = self._camera.image(i)
+            image = self._image(i)
         size = self.camera.intrinsics
         if image.shape != (size.height_px, size.width_px):
             raise RecordingError(
@@ -188,11 +236,15 @@ class Drive:
             image=image,
             radar=radar,
             radar_t_ns=radar_t_ns,
-            speed_mps=float(self.vehicle_signals.speed_at(t_ns)),
-            yaw_rate_radps=float(self.vehicle_signals.yaw_rate_at(t_ns)),
+            speed_mps=self.speed_at(t_ns),
+            yaw_rate_radps=self.yaw_rate_at(t_ns),
+            ego=self.ego_between(int(self.times_ns[i - 1]), t_ns) if i > 0 else None,
         )
         with self._lock:
-            self._cache[i] = frame
-            while len(self._cache) > self._cache_frames:
-                self._cache.popitem(last=False)
+            if i not in self._cache:
+                self._cache[i] = frame
+                self._cached_bytes += image.nbytes
+            while self._cached_bytes > self._cache_bytes and len(self._cache) > 1:
+                _, old = self._cache.popitem(last=False)
+                self._cached_bytes -= old.image.nbytes
         return frame

@@ -8,6 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from core.ego import EgoMotion
+
 
 @dataclass(frozen=True)
 class RadarTarget:
@@ -59,7 +61,9 @@ class FrameInput:
     image: (H, W) uint8 grey, full camera frame, read-only; t_ns: camera time stamp (ns on
     the recording's clock); radar: targets of the radar scan nearest in time (radar_t_ns its
     time, None when no scan is near); speed_mps, yaw_rate_radps: the car's speed and yaw rate
-    (positive turning left) at t_ns, from CAN.
+    (positive turning left) at t_ns, from CAN (or the recording's stated assumptions; NaN
+    when unknown); ego: the car's motion since the previous frame, None for the first frame
+    or when speed is unknown.
     """
 
     index: int
@@ -69,6 +73,7 @@ class FrameInput:
     radar_t_ns: int | None
     speed_mps: float
     yaw_rate_radps: float
+    ego: EgoMotion | None = None
 
     def __post_init__(self) -> None:
         if self.image.dtype != np.uint8 or self.image.ndim != 2:

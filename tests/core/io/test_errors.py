@@ -84,7 +84,8 @@ def test_dbc_signal_missing_lists_close_names(recording: Path, tmp_path: Path) -
     _edit_manifest(rec, raw)
     with pytest.raises(
         RecordingError,
-        match=r"vehicle.dbc: message 'KINEMATICS' has no signal 'YAWRATE'; close names: YAW_RATE",
+        match=r"can \(log vehicle.blf, DBC vehicle.dbc\): message 'KINEMATICS' has no signal "
+        r"'YAWRATE'; close names: YAW_RATE",
     ):
         Drive(rec)
     raw["can"]["yaw_rate"]["message"] = "KINEMATIC"
