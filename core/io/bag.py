@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import struct
+import sys
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from types import TracebackType
@@ -38,6 +39,11 @@ from rosbags.rosbag1 import ReaderError as Rosbag1Error
 from rosbags.rosbag2 import ReaderError as Rosbag2Error
 from rosbags.typesys.store import Typestore
 
+if sys.version_info >= (3, 14):  # as rosbags imports it
+    from compression.zstd import ZstdError
+else:
+    from backports.zstd import ZstdError
+
 from core.io import radar_msgs
 from core.io.canframe import CanFrame
 from core.io.errors import RecordingError
@@ -52,22 +58,25 @@ CAMERA_TYPES = (radar_msgs.COMPRESSED_IMAGE, radar_msgs.IMAGE)
 RADAR_TYPES = (radar_msgs.RADAR_SCAN, radar_msgs.RADAR_TRACKS)
 CAN_TYPES = (CAN_FRAME,)
 
-# What reading a damaged bag raises in rosbags 0.11.9 (found by tests/core/io/test_bag_fuzz.py):
-# its own errors, and what its readers and deserialisers let through unwrapped.
+# What reading a damaged bag raises in rosbags 0.11.9, found by tests/core/io/test_bag_fuzz.py:
+# its own errors, and what its readers, decompressors and QoS parser let through unwrapped.
 BAG_ERRORS: tuple[type[BaseException], ...] = (
     AnyReaderError,  # open, deserialize
-    Rosbag1Error,  # rosbag1 messages(): damaged chunk or record
-    Rosbag2Error,  # rosbag2 messages(): damaged MCAP chunk or record
-    OSError,  # a path that is missing, unreadable, or a folder without metadata.yaml
+    Rosbag1Error,  # ROS 1 messages(): a damaged chunk or record
+    Rosbag2Error,  # ROS 2 messages(): a damaged MCAP chunk or record
+    OSError,  # a missing or unreadable path, a folder without metadata.yaml, a bad bz2 chunk
+    apsw.Error,  # a damaged sqlite3 page met while reading messages
     struct.error,  # a record shorter than its fixed fields
-    apsw.Error,  # a damaged sqlite3 database page, met while reading messages
     ValueError,  # UnicodeDecodeError of a name, type or metadata.yaml; a bad ROS 1 record type
     AssertionError,  # rosbag1 asserts on index records and message times
     KeyError,  # a connection id or definition encoding that the bag does not define
-    TypeError,  # a damaged QoS profile (YAML of the wrong shape); ord() at the end of a file
+    TypeError,  # a damaged QoS profile (YAML of the wrong shape)
     AttributeError,  # ... a QoS enum given as a list
-    MemoryError,  # an MCAP record whose length field says terabytes (read() allocates it)
+    MemoryError,  # an MCAP record whose length says terabytes (read() allocates that much)
     OverflowError,  # ... or more than an index can hold
+    ZstdError,  # a damaged zstd-compressed file, message or MCAP chunk
+    EOFError,  # ... or one cut short
+    RuntimeError,  # a damaged lz4 ROS 1 chunk (lz4.frame raises RuntimeError)
 )
 
 # Raw sensor_msgs/Image encodings read here: channels, bytes per channel, cv2 code to grey.

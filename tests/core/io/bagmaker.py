@@ -28,7 +28,7 @@ import numpy as np
 import yaml
 from rosbags import rosbag1, rosbag2
 from rosbags.interfaces import Nodetype
-from rosbags.rosbag2 import StoragePlugin
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
@@ -36,6 +36,23 @@ from core.io import radar_msgs
 
 Kind = Literal["ros1", "sqlite3", "mcap"]
 KINDS: tuple[Kind, ...] = get_args(Kind)
+# ROS 1: chunks compressed with lz4 or bz2; ROS 2: zstd of the whole file, of each message,
+# or (MCAP only) of each chunk.
+Compression = Literal["none", "lz4", "bz2", "zstd-file", "zstd-message", "zstd-chunk"]
+COMPRESSIONS: dict[Kind, tuple[Compression, ...]] = {
+    "ros1": ("none", "lz4", "bz2"),
+    "sqlite3": ("none", "zstd-file", "zstd-message"),
+    "mcap": ("none", "zstd-file", "zstd-message", "zstd-chunk"),
+}
+ROS1_COMPRESSION = {
+    "lz4": rosbag1.Writer.CompressionFormat.LZ4,
+    "bz2": rosbag1.Writer.CompressionFormat.BZ2,
+}
+ROS2_COMPRESSION = {
+    "zstd-file": CompressionMode.FILE,
+    "zstd-message": CompressionMode.MESSAGE,
+    "zstd-chunk": CompressionMode.STORAGE,
+}
 Message = tuple[str, str, int, "dict[str, Any] | bytes"]
 NS_PER_S = 1_000_000_000
 PLUGINS = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}
@@ -205,15 +222,21 @@ def can_frame(
 
 # --- bags --------------------------------------------------------------------------------
 def write_bag(
-    path: Path, kind: Kind, messages: Sequence[Message], store: Typestore | None = None
+    path: Path,
+    kind: Kind,
+    messages: Sequence[Message],
+    store: Typestore | None = None,
+    compression: Compression = "none",
 ) -> Path:
     """Write `messages` into a new bag of `kind` at `path` (ROS 1: a .bag file); returns path.
 
     One connection per (topic, message type), in order of first appearance. `store` defines
-    the message types (default: `typestore(kind)`).
+    the message types (default: `typestore(kind)`); `compression` is one of COMPRESSIONS[kind].
     """
     if kind not in KINDS:
         raise ValueError(f"kind: expected one of {KINDS}, got {kind!r}")
+    if compression not in COMPRESSIONS[kind]:
+        raise ValueError(f"compression: expected one of {COMPRESSIONS[kind]}, got {compression!r}")
     if (kind == "ros1") != (path.suffix == ".bag"):
         raise ValueError(f"path: a ROS 1 bag and only it ends in .bag, got {path} for {kind}")
     store = store or typestore(kind)
@@ -221,8 +244,12 @@ def write_bag(
     writer: rosbag1.Writer | rosbag2.Writer
     if kind == "ros1":
         writer = rosbag1.Writer(path)
+        if compression != "none":
+            writer.set_compression(ROS1_COMPRESSION[compression])
     else:
         writer = rosbag2.Writer(path, version=9, storage_plugin=PLUGINS[kind])
+        if compression != "none":
+            writer.set_compression(ROS2_COMPRESSION[compression], CompressionFormat.ZSTD)
     with writer:
         conns = {
             stream: writer.add_connection(stream[0], stream[1], typestore=store)

@@ -24,7 +24,9 @@ import cv2
 import numpy as np
 import pytest
 from bagmaker import (
+    COMPRESSIONS,
     KINDS,
+    Compression,
     Kind,
     Message,
     bag_path,
@@ -42,7 +44,7 @@ from core.io.bag import CAN_TYPES, RADAR_TYPES, BagReader, CameraStream
 from core.io.errors import RecordingError
 from core.io.radar_msgs import CAN_FRAME, COMPRESSED_IMAGE, IMAGE, RADAR_SCAN, RADAR_TRACKS
 
-FUZZ_EXAMPLES = int(os.environ.get("FUZZ_EXAMPLES", "250"))
+FUZZ_EXAMPLES = int(os.environ.get("FUZZ_EXAMPLES", "200"))
 # One damaged bag reads in milliseconds; this long means a loop that does not end.
 HANG_S = 20
 T0_NS = 1_700_000_000_000_000_000
@@ -74,10 +76,10 @@ def _messages() -> list[Message]:
 
 
 @cache
-def _valid_bag(kind: Kind) -> dict[str, bytes]:
+def _valid_bag(kind: Kind, compression: Compression) -> dict[str, bytes]:
     """The files of a valid bag of `kind`: name -> content ("" is the .bag file itself)."""
     with tempfile.TemporaryDirectory() as tmp:
-        path = write_bag(bag_path(Path(tmp), kind), kind, _messages())
+        path = write_bag(bag_path(Path(tmp), kind), kind, _messages(), compression=compression)
         if path.is_file():
             return {"": path.read_bytes()}
         return {p.name: p.read_bytes() for p in sorted(path.iterdir())}
@@ -177,14 +179,16 @@ def _read_everything(path: Path) -> None:
 PARTS = ("storage file", "metadata.yaml", "storage file alone")
 
 
-def _write_damaged(folder: Path, kind: Kind, part: str, edits: list[Edit]) -> Path:
-    files = dict(_valid_bag(kind))
+def _write_damaged(
+    folder: Path, kind: Kind, compression: Compression, part: str, edits: list[Edit]
+) -> Path:
+    files = dict(_valid_bag(kind, compression))
     if "" in files:
         path = bag_path(folder, kind)
         path.write_bytes(_damage(files[""], edits))
         return path
     (storage,) = [name for name in files if name != METADATA]
-    if part == "storage file alone":
+    if part == "storage file alone" and compression != "zstd-file":  # needs metadata.yaml
         path = folder / storage
         path.write_bytes(_damage(files[storage], edits))
         return path
@@ -210,16 +214,37 @@ def test_damaged_bags_read_or_raise_recording_error(
 ) -> None:
     event(f"damaged: {'the .bag file' if kind == 'ros1' else part}")
     with tempfile.TemporaryDirectory() as tmp:
-        path = _write_damaged(Path(tmp), kind, part, edits)
+        path = _write_damaged(Path(tmp), kind, "none", part, edits)
+        with _time_limit(HANG_S):
+            _read_everything(path)
+
+
+COMPRESSED = [(k, c) for k in KINDS for c in COMPRESSIONS[k] if c != "none"]
+
+
+@pytest.mark.fuzz
+@settings(
+    max_examples=FUZZ_EXAMPLES,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+@given(variant=st.sampled_from(COMPRESSED), edits=EDITS, part=st.sampled_from(PARTS))
+def test_damaged_compressed_bags_read_or_raise_recording_error(
+    variant: tuple[Kind, Compression], edits: list[Edit], part: str
+) -> None:
+    kind, compression = variant
+    event(f"compression: {kind} {compression}")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = _write_damaged(Path(tmp), kind, compression, part, edits)
         with _time_limit(HANG_S):
             _read_everything(path)
 
 
 def test_the_valid_bags_read_whole() -> None:
     """The fuzzing starts from bags that read without error (else it tests nothing)."""
-    for kind in KINDS:
+    for kind, compression in [(k, "none") for k in KINDS] + COMPRESSED:
         with tempfile.TemporaryDirectory() as tmp:
-            path = write_bag(bag_path(Path(tmp), kind), kind, _messages())
+            path = _write_damaged(Path(tmp), kind, compression, "storage file", [])
             with BagReader(path) as bag:
                 assert len(CameraStream(bag, "/cam")) == 3
                 assert CameraStream(bag, "/raw").image(2).shape == (6, 8)
