@@ -24,7 +24,6 @@ from core.camera import Intrinsics
 from core.cli import main
 from core.importer import MAPPING_EXAMPLE, scale_intrinsics
 from core.io import Drive, load_calibration, load_manifest, radar_msgs
-from core.io.errors import RecordingError
 from core.io.manifest import BagStream, RadarCanSource
 from core.io.writer import png_image_message, vehicle_dbc_path
 
@@ -42,20 +41,6 @@ can:
   speed: {message: SPEED, signal: SPEED, unit: km/h}
   yaw_rate: {message: KINEMATICS, signal: YAW_RATE, unit: deg/s}
 """
-
-XFAIL_RADAR_OVER_CAN = pytest.mark.xfail(
-    reason="Drive reads radar over CAN: integration pending", strict=True, raises=RecordingError
-)
-XFAIL_ASSUMPTIONS = pytest.mark.xfail(
-    reason="Drive uses the manifest's assumptions: integration pending",
-    strict=True,
-    raises=AssertionError,
-)
-XFAIL_CAN_FROM_BAG = pytest.mark.xfail(
-    reason="Drive reads CAN from a bag topic: integration pending",
-    strict=True,
-    raises=AssertionError,
-)
 
 
 def run(capsys: pytest.CaptureFixture[str], *argv: str | Path) -> tuple[int, str, str]:
@@ -148,7 +133,6 @@ def test_udacity_guardrail_video(
         assert "guardrail_960x540.mp4" in description and "assumed 27 m/s" in description
 
 
-@XFAIL_ASSUMPTIONS
 def test_drive_gives_the_assumed_speed(
     realdata: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -297,7 +281,6 @@ def test_rav4_still_with_can_writes_manifest_and_calibration(
     assert cal.radar_mount.x_m == RAV4_RADAR_X_M and cal.camera.extrinsics.height_m == 1.2
 
 
-@XFAIL_RADAR_OVER_CAN
 def test_rav4_still_opens_with_speed_and_radar_tracks(
     realdata: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -680,7 +663,6 @@ def test_a_ros2_mcap_bag_with_radar_and_can(
         assert target.y_m == pytest.approx(r * math.sin(a), abs=1e-4)
 
 
-@XFAIL_CAN_FROM_BAG
 def test_drive_reads_speed_from_the_bags_can_topic(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
