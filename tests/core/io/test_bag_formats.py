@@ -27,9 +27,12 @@ from bagmaker import (
     radar_scan,
     radar_tracks,
     raw_image,
+    ros1_typestore,
+    serialize,
     write_bag,
     write_multifile_bag,
 )
+from rosbags import rosbag1
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from core.io.bag import (
@@ -358,6 +361,23 @@ def test_scans_out_of_time_order_are_sorted_and_reported(tmp_path: Path, kind: K
     assert "1 scan(s) stamped earlier than the scan before, sorted" in warnings[0]
 
 
+def test_a_ros1_topic_from_two_publishers_reads_as_one_stream(tmp_path: Path) -> None:
+    # rosbag record writes one connection per publisher of a topic
+    path = tmp_path / "two.bag"
+    with rosbag1.Writer(path) as writer:
+        a, b = (
+            writer.add_connection("/radar", RADAR_SCAN, typestore=ros1_typestore(), callerid=c)
+            for c in ("/driver_a", "/driver_b")
+        )
+        for k, conn in enumerate([a, b, a, b]):
+            scan = radar_scan(_t(k), [(10.0 + k, 0.0, 0.0, 1.0)])
+            writer.write(conn, _t(k), serialize("ros1", RADAR_SCAN, scan))
+    with BagReader(path) as bag:
+        radar = bag.read_radar(bag.connection("/radar", RADAR_TYPES, "radar"), warn=pytest.fail)
+    assert radar.range_m.tolist() == [10.0, 11.0, 12.0, 13.0]
+    assert radar.t_ns.tolist() == [_t(k) for k in range(4)]
+
+
 @pytest.mark.parametrize("kind", KINDS)
 def test_can_frames_from_a_bag(tmp_path: Path, kind: Kind) -> None:
     frames = [
@@ -612,7 +632,8 @@ def test_a_log_time_beyond_int64_is_an_error(tmp_path: Path) -> None:
     with (
         BagReader(_write(tmp_path, "mcap", messages)) as bag,
         pytest.raises(
-            RecordingError, match=rf"/cam: the first message has log time {t} ns; expected an integer"
+            RecordingError,
+            match=rf"/cam: the first message has log time {t} ns; expected an integer",
         ),
     ):
         CameraStream(bag, None)
