@@ -185,6 +185,7 @@ def _calibration_spec(args: argparse.Namespace) -> CalibrationSpec:
         camera_height_m=args.camera_height_m,
         camera_x_m=args.camera_x_m,
         pitch_rad=args.pitch_rad,
+        yaw_rad=args.yaw_rad,
         radar_mount=mount,
     )
 
@@ -305,6 +306,20 @@ def _cmd_import(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_info(args: argparse.Namespace) -> int:
+    from core.io.diagnostics import drive_report, format_report
+    from core.io.drive import Drive
+    from core.io.errors import RecordingError
+
+    try:
+        with Drive(args.recording, use_cache=not args.no_cache) as drive:
+            print(format_report(drive_report(drive)))
+    except RecordingError as err:
+        print(f"fusionscope info: {err}", file=sys.stderr)
+        return 2
+    return 0
+
+
 def _cmd_synth(args: argparse.Namespace) -> int:
     from core.io.errors import RecordingError
     from core.synth.generate import generate
@@ -410,6 +425,13 @@ def _common_import_args(p: argparse.ArgumentParser) -> None:
     )
     m.add_argument(
         "--pitch-rad", metavar="RAD", type=_finite, default=0.0, help="camera pitch, down positive"
+    )
+    m.add_argument(
+        "--yaw-rad",
+        metavar="RAD",
+        type=_finite,
+        default=0.0,
+        help="camera yaw, left positive: the straight-ahead point moves right (default: 0)",
     )
     m.add_argument(
         "--radar-x-m", metavar="M", type=_finite, help="radar ahead of the reference point"
@@ -603,6 +625,18 @@ def build_parser() -> argparse.ArgumentParser:
     _can_args(bag, from_bag=True)
     _common_import_args(bag)
     bag.set_defaults(func=_cmd_import)
+
+    info = sub.add_parser(
+        "info",
+        help="what a recording holds: streams, rates, gaps, camera-radar skew, warnings",
+    )
+    info.add_argument("recording", type=Path, help="a recording folder")
+    info.add_argument(
+        "--no-cache",
+        action="store_true",
+        help="build the index from the files even when a cached one is valid",
+    )
+    info.set_defaults(func=_cmd_info)
 
     synth = sub.add_parser("synth", help="generate a synthetic drive with exact ground truth")
     synth.add_argument("--scenario", required=True, choices=sorted(SCENARIOS))

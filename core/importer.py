@@ -163,8 +163,9 @@ IntrinsicsSpec = CameraInfoFile | FieldOfView | Pinhole
 class CalibrationSpec:
     """How to calibrate the imported camera and radar.
 
-    camera_height_m, camera_x_m, pitch_rad: the camera's pose in the vehicle frame (x forward,
-    origin on the road under the reference point); radar_mount: needed when the recording has
+    camera_height_m, camera_x_m, pitch_rad (down positive), yaw_rad (left positive): the
+    camera's pose in the vehicle frame (x forward, origin on the road under the reference
+    point); radar_mount: needed when the recording has
     radar. `rows_used_px` is left None (the engine uses all rows).
     """
 
@@ -172,6 +173,7 @@ class CalibrationSpec:
     camera_height_m: float = DEFAULT_CAMERA_HEIGHT_M
     camera_x_m: float = DEFAULT_CAMERA_X_M
     pitch_rad: float = 0.0
+    yaw_rad: float = 0.0
     radar_mount: RadarMount | None = None
 
 
@@ -256,12 +258,16 @@ def _build_calibration(
         )
     mount = spec.radar_mount if spec.radar_mount is not None else RadarMount(0.0, 0.0)
     extrinsics = Extrinsics(
-        height_m=spec.camera_height_m, x_m=spec.camera_x_m, pitch_rad=spec.pitch_rad
+        height_m=spec.camera_height_m,
+        x_m=spec.camera_x_m,
+        pitch_rad=spec.pitch_rad,
+        yaw_rad=spec.yaw_rad,
     )
     calibration = Calibration(CameraModel(intrinsics, extrinsics, None), mount)
     text = (
         f"Intrinsics: {source}. Camera {spec.camera_height_m:g} m above the road, "
-        f"{spec.camera_x_m:g} m ahead of the reference point, pitch {spec.pitch_rad:g} rad."
+        f"{spec.camera_x_m:g} m ahead of the reference point, pitch {spec.pitch_rad:g} rad, "
+        f"yaw {spec.yaw_rad:g} rad."
     )
     if has_radar:
         text += (

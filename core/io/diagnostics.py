@@ -16,7 +16,7 @@ import numpy.typing as npt
 
 from core.io.drive import Drive
 
-GAP_FACTOR = 1.5
+GAP_FACTOR = 2.0
 NS_PER_S = 1_000_000_000
 NS_PER_MS = 1_000_000
 

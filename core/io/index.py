@@ -269,17 +269,20 @@ def read_index(path: Path) -> DriveIndex:
 
 
 def load_index(manifest: Manifest, use_cache: bool = True) -> tuple[DriveIndex, bool]:
-    """The recording's index and whether it came from the cache (built and cached otherwise)."""
-    path = cache_dir() / "index" / f"{index_key(manifest)}.npz" if use_cache else None
-    if path is not None and path.is_file():
+    """The recording's index and whether it came from the cache.
+
+    use_cache False builds it from the files even when the cache holds a valid copy. A
+    built index is saved to the cache either way.
+    """
+    path = cache_dir() / "index" / f"{index_key(manifest)}.npz"
+    if use_cache and path.is_file():
         try:
             return read_index(path), True
         except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile):
             pass  # a stale or damaged cache entry is rebuilt
     index = build_index(manifest)
-    if path is not None:
-        try:
-            save_index(index, path)
-        except OSError:
-            pass  # see the module docstring
+    try:
+        save_index(index, path)
+    except OSError:
+        pass  # see the module docstring
     return index, False

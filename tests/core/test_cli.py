@@ -34,3 +34,24 @@ def test_a_subcommand_is_required(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit):
         main([])
     assert "serve" in capsys.readouterr().err
+
+
+def test_info_reports_streams_skew_and_open_time(capsys: pytest.CaptureFixture[str]) -> None:
+    highway = Path(build_parser().parse_args(["serve"]).recordings) / "highway"
+    assert main(["info", str(highway), "--no-cache"]) == 0
+    out = capsys.readouterr().out
+    assert "frames     150" in out
+    assert "index built in" in out
+    for stream in ("camera", "radar", "CAN speed", "CAN yaw rate"):
+        assert f"\n{stream} " in out
+    assert "0 frame(s) without a scan" in out
+    assert main(["info", str(highway)]) == 0
+    assert "(index from cache)" in capsys.readouterr().out
+
+
+def test_info_on_a_folder_without_a_recording(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["info", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("fusionscope info: ") and "recording.yaml" in err

@@ -22,6 +22,7 @@ from recording_fixture import (
 from core.ego import integrate, step
 from core.io import Drive, RecordingWriter
 from core.io.diagnostics import drive_report, format_report
+from core.io.index import cache_dir, index_key
 
 S = 1_000_000_000
 
@@ -167,3 +168,18 @@ def test_image_cache_stays_within_its_byte_budget(recording: Path) -> None:
             drive.frame(i)
         assert drive._cached_bytes <= 2 * frame_bytes
         assert list(drive._cache) == [4, 0]
+
+
+def test_a_damaged_cache_entry_is_rebuilt(recording: Path, tmp_path: Path) -> None:
+    folder = copy(recording, tmp_path)
+    with Drive(folder) as first:
+        expected = first.times_ns.copy()
+    (entry,) = [
+        p for p in (cache_dir() / "index").iterdir() if p.name.startswith(index_key(first.manifest))
+    ]
+    entry.write_bytes(b"PK\x03\x04 not a zip")
+    with Drive(folder) as second:
+        assert not second.index_cached
+        np.testing.assert_array_equal(second.times_ns, expected)
+    with Drive(folder) as third:
+        assert third.index_cached
