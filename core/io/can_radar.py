@@ -148,7 +148,7 @@ class RadarCanDecoder:
             scan_of[i] = len(scan_t) - 1
 
         # 2. Targets: valid and finite, in SI units and the engine's signs.
-        distance, lateral, range_rate, valid, track_id = (values[:, k] for k in range(5))
+        distance, lateral, range_rate, valid, track_id = values.T  # as self._fields
         keep: npt.NDArray[np.bool_] = np.ones(len(t), dtype=bool)
         if src.valid is not None:
             keep = valid != 0

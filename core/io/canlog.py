@@ -32,6 +32,7 @@ import can
 import cantools
 import numpy as np
 import numpy.typing as npt
+from can.io import blf
 from can.io.blf import BLFParseError
 from cantools.database.can import Database, Message
 
@@ -557,9 +558,6 @@ TEXT_FORMATS: dict[str, Callable[[], _LineParser]] = {
 LOG_SUFFIXES = (".blf", *TEXT_FORMATS)
 
 
-BLF_OBJECT_HEADER_BYTES = 16  # "LOBJ", header size, header version, object size, type
-
-
 class _CheckedBLFReader(can.BLFReader):
     """python-can's BLFReader, refusing objects too small to move past.
 
@@ -570,10 +568,12 @@ class _CheckedBLFReader(can.BLFReader):
     """
 
     def _parse_data(self, data: bytes) -> Iterator[can.Message]:
+        header = blf.OBJ_HEADER_BASE_STRUCT  # "LOBJ", header size, version, object size, type
         pos = 0
-        while (found := data.find(b"LOBJ", pos, pos + 8)) >= 0 and found + 12 <= len(data):
-            size = int.from_bytes(data[found + 8 : found + 12], "little")
-            if size < BLF_OBJECT_HEADER_BYTES:
+        # As python-can: the next object starts within 8 bytes (padding) of the last one's end.
+        while (found := data.find(b"LOBJ", pos, pos + 8)) >= 0 and found + header.size <= len(data):
+            size = header.unpack_from(data, found)[3]
+            if size < header.size:
                 raise BLFParseError(f"an object of {size} bytes in a container")
             pos = found + size
         return super()._parse_data(data)
