@@ -77,7 +77,11 @@ class RadarCanDecoder:
     Notes:
         A radar's longitudinal relative speed (the RAV4's REL_SPEED) is taken as the range
         rate: the two differ by the cosine of the azimuth, under 1.5 % within 10 degrees of
-        the axis, more for near targets off to the side.
+        the axis, more for near targets off to the side. The RAV4's REL_SPEED is already
+        positive receding (sign +1): on the real log it matches the change of LONG_DIST
+        between scans (slope 1.01), so a car being approached has a negative range rate.
+        The scan rule assumes the radar sends every slot every cycle (the RAV4 does); a
+        radar that skips slots gets cycles merged until a slot comes again.
         Targets whose mapped `valid` signal is zero are dropped without a word (the radar
         says they are not there); targets with a non-finite value are dropped and reported
         with `warn`, as are frames the DBC cannot decode and stamps outside the log's main
