@@ -20,7 +20,7 @@ from recording_fixture import (
 )
 
 from core.ego import integrate, step
-from core.io import Drive, RecordingWriter
+from core.io import Drive, RecordingError, RecordingWriter
 from core.io.diagnostics import drive_report, format_report
 from core.io.index import cache_dir, index_key
 
@@ -183,3 +183,31 @@ def test_a_damaged_cache_entry_is_rebuilt(recording: Path, tmp_path: Path) -> No
         np.testing.assert_array_equal(second.times_ns, expected)
     with Drive(folder) as third:
         assert third.index_cached
+
+
+def test_time_offsets_move_each_stream_onto_the_camera_clock(
+    recording: Path, tmp_path: Path
+) -> None:
+    folder = copy(recording, tmp_path)
+    # Camera +1 s; radar +1 s - 10 ms (now exactly on the frames); CAN +1 s + 40 ms.
+    offsets = {"camera": S, "radar": S - RADAR_LAG_NS, "can": S + 40_000_000}
+    edit_manifest(folder, time_offsets_ns=offsets)
+    with Drive(folder) as drive:
+        assert drive.times_ns[0] == S
+        f = drive.frame(2)
+        v = drive.vehicle_signals
+    assert f.radar_t_ns == f.t_ns
+    assert v.speed_t_ns[0] == S + 40_000_000
+    # The frame at camera time 0.2 s sees the CAN sample logged at 0.16 s.
+    assert f.speed_mps == pytest.approx(speed_mps(160_000_000), abs=0.01)
+
+
+@pytest.mark.parametrize("outside", ["../elsewhere.yaml", "/etc/hostname", "bag/../../x"])
+def test_a_manifest_may_not_point_outside_its_folder(
+    recording: Path, tmp_path: Path, outside: str
+) -> None:
+    folder = copy(recording, tmp_path)
+    (tmp_path / "elsewhere.yaml").write_text("format_version: 1\n")
+    edit_manifest(folder, calibration=outside)
+    with pytest.raises(RecordingError, match="outside the recording folder"):
+        Drive(folder)
