@@ -53,13 +53,13 @@ from core.io import radar_msgs
 from core.io.bag import CAN_TYPES, RADAR_TYPES, BagReader, CameraStream
 from core.io.calibration import Calibration, RadarMount, load_calibration, save_calibration
 from core.io.can_radar import natural_key
+from core.io.canfiles import iter_log_frames
 from core.io.canframe import CanFrame
 from core.io.canlog import (
     SignalMapping,
     check_signals,
     find_signal,
     id_text,
-    iter_log_frames,
     load_dbc,
 )
 from core.io.errors import RecordingError

@@ -32,13 +32,13 @@ from cantools.database.can import Database
 
 from core.io.bag import CAMERA_TYPES, CAN_TYPES, RADAR_TYPES, BagReader
 from core.io.can_radar import RadarCanDecoder
+from core.io.canfiles import iter_log_frames
 from core.io.canframe import CanFrame
 from core.io.canlog import (
     FrameDecoder,
     VehicleSignalDecoder,
     VehicleSignals,
     decode_frames,
-    iter_log_frames,
     load_dbc,
 )
 from core.io.errors import RecordingError

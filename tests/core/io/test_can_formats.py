@@ -21,8 +21,8 @@ import pytest
 from can.io import blf
 from can.io.trc import TRCFileVersion
 
+from core.io.canfiles import iter_log_frames
 from core.io.canframe import CanFrame
-from core.io.canlog import iter_log_frames
 from core.io.errors import RecordingError
 
 T0_S = 1_700_000_000.123456

@@ -28,6 +28,7 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from core.io.can_radar import RadarCanDecoder
+from core.io.canfiles import iter_log_frames
 from core.io.canframe import CanFrame
 from core.io.canlog import (
     SPEED_UNITS_TO_MPS,
@@ -35,7 +36,6 @@ from core.io.canlog import (
     SignalMapping,
     VehicleSignalDecoder,
     decode_frames,
-    iter_log_frames,
     load_dbc,
 )
 from core.io.errors import RecordingError

@@ -14,6 +14,7 @@ import pytest
 from cantools.database.can import Database
 
 from core.io.can_radar import RadarCanDecoder, natural_key
+from core.io.canfiles import iter_log_frames
 from core.io.canframe import CanFrame
 from core.io.canlog import (
     SPEED_UNITS_TO_MPS,
@@ -21,7 +22,6 @@ from core.io.canlog import (
     SignalMapping,
     VehicleSignalDecoder,
     decode_frames,
-    iter_log_frames,
     load_dbc,
 )
 from core.io.errors import RecordingError

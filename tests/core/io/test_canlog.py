@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from cantools.database.can import Database
 
+from core.io.canfiles import iter_log_frames
 from core.io.canframe import CanFrame
 from core.io.canlog import (
     SPEED_UNITS_TO_MPS,
@@ -21,7 +22,6 @@ from core.io.canlog import (
     VehicleSignalDecoder,
     VehicleSignals,
     decode_frames,
-    iter_log_frames,
     load_dbc,
     read_vehicle_signals,
 )
