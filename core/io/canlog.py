@@ -1,6 +1,6 @@
-"""CAN logs: their frames, and the car's speed and yaw rate decoded from them with a DBC.
+"""The car's speed and yaw rate decoded with a DBC from CAN frames, one pass over a source.
 
-    frames = iter_log_frames(path, warn=warn)            # CanFrame, in file order
+    frames = iter_log_frames(path, warn=warn)            # core.io.canfiles, or a bag's topic
     vehicle = VehicleSignalDecoder(db, source, where)     # one decoder per quantity family
     radar = RadarCanDecoder(db, radar_source, where)      # core.io.can_radar
     decode_frames(frames, [vehicle, radar])               # one pass over the log
