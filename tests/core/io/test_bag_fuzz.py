@@ -2,10 +2,11 @@
 
 Hypothesis flips, inserts, deletes and truncates bytes of small valid bags (ROS 1, ROS 2
 sqlite3, ROS 2 MCAP; for ROS 2, of the storage file in its folder, of metadata.yaml, or of the
-storage file opened alone), then opens each, indexes and decodes both camera topics, reads
-both radar topics and the CAN topic.
+storage file opened alone), uncompressed and in every compression rosbags writes, then opens
+each, indexes and decodes both camera topics, reads both radar topics and the CAN topic.
 
-FUZZ_EXAMPLES sets the number of damaged bags per kind (default: a short run for CI). Run
+FUZZ_EXAMPLES sets the number of damaged bags per kind, and for the compressed variants
+together (default: a short run for CI, some 10 s in all). Run
 `pytest tests/core/io/test_bag_fuzz.py --hypothesis-show-statistics` to see where they failed.
 """
 
