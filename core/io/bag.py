@@ -548,10 +548,17 @@ class BagReader:
 
 
 class CameraStream:
-    """Random access to the images of one camera topic (indexed once, decoded on demand).
+    """Random access to the images of one camera topic, in time order, decoded on demand.
 
-    times_ns: (N,) int64 camera stamps (log times + offset), in bag order. mono16_bits: the
-    significant bits of 16-bit images (see decode_image).
+    log_ns: (N,) bag log time of each frame, ascending; occurrence: (N,) which of the
+    messages at that same log time it is (bag order), so (log_ns, occurrence) finds a message
+    again exactly; times_ns: log_ns + offset_ns; skipped: frames left out because their
+    stamps lie outside the stream's main span (timeline.main_block: a 1970 stamp mid-drive).
+    mono16_bits: the significant bits of 16-bit images (see decode_image).
+
+    Notes:
+        rosbags reads a bag split over several files one file after another, so the log
+        times it yields can go backwards between files: they are sorted here.
     """
 
     def __init__(
@@ -561,27 +568,25 @@ class CameraStream:
         self.bag = bag
         self.mono16_bits = mono16_bits
         self.conn = bag.connection(topic, CAMERA_TYPES, "camera")
-        log_ns = bag.log_times_ns(self.conn)
-        if len(log_ns) == 0:
+        raw_ns = bag.log_times_ns(self.conn)
+        in_time = raw_ns[np.argsort(raw_ns, kind="stable")]
+        occurrence = np.arange(len(in_time)) - np.searchsorted(in_time, in_time, side="left")
+        keep = main_block(in_time)
+        self.log_ns: Int64Array = in_time[keep]
+        self.occurrence: Int64Array = occurrence[keep]
+        self.skipped = int(np.count_nonzero(~keep))
+        if len(self.log_ns) == 0:
             raise RecordingError(
                 f"{bag.path}: camera topic {self.conn.topic}: expected images, the stream is empty"
             )
-        if np.any(np.diff(log_ns) < 0):
-            raise RecordingError(
-                f"{bag.path}: camera topic {self.conn.topic}: stamps not in time order"
-            )
-        self._log_ns = log_ns
-        # The k-th message at the same stamp, for exact random access.
-        first = np.searchsorted(log_ns, log_ns, side="left")
-        self._occurrence = np.arange(len(log_ns)) - first
-        self.times_ns: Int64Array = log_ns + offset_ns
+        self.times_ns: Int64Array = self.log_ns + offset_ns
 
     def __len__(self) -> int:
-        return len(self._log_ns)
+        return len(self.log_ns)
 
     def image(self, i: int) -> npt.NDArray[np.uint8]:
         """(H, W) uint8 grey image of frame `i`."""
-        t = int(self._log_ns[i])
-        msg = self.bag.read_at(self.conn, t, int(self._occurrence[i]))
+        t = int(self.log_ns[i])
+        msg = self.bag.read_at(self.conn, t, int(self.occurrence[i]))
         where = f"{self.bag.path}: {self.conn.topic} at {_stamp(msg)} (log t={t} ns)"
         return decode_image(msg, self.conn.msgtype, where, self.mono16_bits)

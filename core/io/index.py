@@ -8,9 +8,9 @@ or `~/.cache/fusionscope`), one `.npz` per recording, keyed by the recording's p
 and modification time of each of its files, and `INDEX_VERSION`. A cache that cannot be
 written (read-only home) is skipped silently: it only saves time.
 
-Camera stamps are the bag's log times, which the bag reader yields in time order; stamps
-outside the main body of the stream (a 1970 stamp in the middle of a drive, see
-`core.io.timeline`) are skipped and reported as a warning.
+Camera stamps are the bag's log times, put in time order by `CameraStream`; stamps outside
+the main body of the stream (a 1970 stamp in the middle of a drive, see `core.io.timeline`)
+are skipped and reported as a warning.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ import numpy as np
 import numpy.typing as npt
 from cantools.database.can import Database
 
-from core.io.bag import CAMERA_TYPES, CAN_TYPES, RADAR_TYPES, BagReader
+from core.io.bag import CAN_TYPES, RADAR_TYPES, BagReader, CameraStream
 from core.io.can_radar import RadarCanDecoder
 from core.io.canfiles import iter_log_frames
 from core.io.canframe import CanFrame
@@ -41,10 +41,8 @@ from core.io.canlog import (
     decode_frames,
     load_dbc,
 )
-from core.io.errors import RecordingError
 from core.io.manifest import MANIFEST_NAME, CanBus, Manifest, RadarCanSource
 from core.io.radarscans import RadarScans
-from core.io.timeline import main_block
 
 INDEX_VERSION = 1
 NS_PER_S = 1_000_000_000
@@ -92,19 +90,6 @@ class _Bags:
         for bag in self.open.values():
             bag.close()
         self.open.clear()
-
-
-def camera_order(log_ns: Int64Array) -> tuple[Int64Array, Int64Array, int]:
-    """The frames to keep, in time order: (log_ns, occurrence, skipped).
-
-    occurrence counts the earlier messages (bag order) with the same log time, which with
-    the log time finds a message again exactly.
-    """
-    order = np.argsort(log_ns, kind="stable")
-    in_time = log_ns[order]
-    occurrence = np.arange(len(in_time)) - np.searchsorted(in_time, in_time, side="left")
-    keep = main_block(in_time)
-    return in_time[keep], occurrence[keep], int(np.count_nonzero(~keep))
 
 
 def _can_frames(bags: _Bags, bus: CanBus, warn: Callable[[str], None]) -> Iterable[CanFrame]:
@@ -156,12 +141,11 @@ def build_index(manifest: Manifest) -> DriveIndex:
     warnings: list[str] = []
     bags = _Bags(m)
     try:
-        bag = bags.get(m.camera.bag)
-        conn = bag.connection(m.camera.topic, CAMERA_TYPES, "camera")
-        log_ns, occurrence, skipped = camera_order(bag.log_times_ns(conn))
-        where = f"{bag.path}: camera topic {conn.topic}"
-        if len(log_ns) == 0:
-            raise RecordingError(f"{where}: expected images, the stream is empty")
+        camera = CameraStream(
+            bags.get(m.camera.bag), m.camera.topic, m.time_offsets.camera_ns, m.camera.mono16_bits
+        )
+        log_ns, skipped = camera.log_ns, camera.skipped
+        where = f"{camera.bag.path}: camera topic {camera.conn.topic}"
         if skipped:
             warnings.append(
                 f"{where}: skipped {skipped} frame(s) whose stamps lie outside the drive's "
@@ -179,8 +163,8 @@ def build_index(manifest: Manifest) -> DriveIndex:
         bags.close()
     return DriveIndex(
         camera_log_ns=log_ns,
-        camera_occurrence=occurrence,
-        camera_t_ns=log_ns + m.time_offsets.camera_ns,
+        camera_occurrence=camera.occurrence,
+        camera_t_ns=camera.times_ns,
         camera_skipped=skipped,
         radar=radar,
         vehicle=vehicle,
