@@ -7,7 +7,7 @@ import math
 import sys
 import textwrap
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -60,26 +60,19 @@ def _non_negative(text: str) -> float:
     return value
 
 
-def _positive_int(text: str) -> int:
-    """argparse type: an integer >= 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
-    return value
+def _int_at_least(minimum: int) -> Callable[[str], int]:
+    """argparse type: a whole number >= minimum."""
 
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"expected a whole number >= {minimum}, got {text!r}")
+        return value
 
-def _non_negative_int(text: str) -> int:
-    """argparse type: an integer >= 0."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}")
-    return value
+    return parse
 
 
 def _s_to_ns(seconds: float) -> int:
@@ -362,7 +355,7 @@ def _image_size_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--width",
         metavar="PX",
-        type=_positive_int,
+        type=_int_at_least(1),
         default=640,
         help="output width in px; the height follows the aspect ratio (default: 640, paper 001)",
     )
@@ -560,7 +553,7 @@ def build_parser() -> argparse.ArgumentParser:
     video.add_argument(
         "--start-ns",
         metavar="NS",
-        type=_non_negative_int,
+        type=_int_at_least(0),
         help="time stamp (ns) of the video's first frame, without CAN (default: 0)",
     )
     video.add_argument(
