@@ -115,8 +115,10 @@ class RecordingWriter:
         calibration: Calibration,
         description: str = "",
         generator: Mapping[str, Any] | None = None,
+        yaw_rate_bias: str = "none",
     ) -> None:
         self.out_dir = Path(out_dir)
+        self.yaw_rate_bias = yaw_rate_bias
         if self.out_dir.exists() and (not self.out_dir.is_dir() or any(self.out_dir.iterdir())):
             raise RecordingError(
                 f"{self.out_dir}: expected a new or empty folder for the recording, it is not empty"
@@ -254,7 +256,12 @@ class RecordingWriter:
             generator=self.generator,
             camera=BagStream(BAG_DIR, CAMERA_TOPIC),
             radar=BagStream(BAG_DIR, RADAR_TOPIC),
-            can=CanSource(CanBus(dbc=(DBC_NAME,), log=CAN_LOG), SPEED_SIGNAL, YAW_RATE_SIGNAL),
+            can=CanSource(
+                CanBus(dbc=(DBC_NAME,), log=CAN_LOG),
+                SPEED_SIGNAL,
+                YAW_RATE_SIGNAL,
+                yaw_rate_bias=self.yaw_rate_bias,
+            ),
             calibration=CALIBRATION_NAME,
             groundtruth=GROUNDTRUTH_NAME if self._truth is not None else None,
         )

@@ -17,6 +17,7 @@ import numpy as np
 
 from core.camera import CameraModel, Extrinsics, Intrinsics
 from core.io.calibration import Calibration, RadarMount
+from core.io.canlog import MIN_STANDSTILL_S, STANDSTILL_SPEED_MPS
 from core.io.groundtruth import FrameTruth
 from core.io.writer import RecordingWriter
 from core.synth.render import Renderer
@@ -73,8 +74,17 @@ def generate(
     out = Path(out_dir)
     generator = {"scenario": scenario, "seconds": float(seconds), "seed": int(seed)}
     description = (SCENARIOS[scenario].__doc__ or scenario).strip()
+    # Where the car stands still long enough, the manifest asks for the gyro's bias to be
+    # estimated there (core.io.canlog), as an engineer would for a real drive.
+    can_period_s = can_states[1][0] - can_states[0][0] if len(can_states) > 1 else 0.0
+    still_s = sum(can_period_s for _, speed, _ in can_states if speed < STANDSTILL_SPEED_MPS)
     with RecordingWriter(
-        out, name=out.name, calibration=calibration, description=description, generator=generator
+        out,
+        name=out.name,
+        calibration=calibration,
+        description=description,
+        generator=generator,
+        yaw_rate_bias="standstill" if still_s >= MIN_STANDSTILL_S else "none",
     ) as writer:
         for k, t in enumerate(t_s):
             t = float(t)
