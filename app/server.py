@@ -146,6 +146,7 @@ class InspectorServer:
             len(entry.drive),
             entry.drive.frame_rate_hz,
             lambda state: entry.worker.submit(client_id, state),
+            entry.drive.notes,
         )
 
     # --- drives -------------------------------------------------------------------------

@@ -7,7 +7,7 @@ Controls only replace the state and ask for a render; the render worker draws, a
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 import viser
@@ -99,8 +99,13 @@ class ClientSession:
         frame_count: int,
         frame_rate_hz: float,
         request: Callable[[ViewState], None],
+        notes: Sequence[str] = (),
     ) -> None:
-        """Build the timeline for a drive of `frame_count` frames and render its first frame."""
+        """Build the timeline for a drive of `frame_count` frames and render its first frame.
+
+        notes: what the viewer should know about the recording (assumptions, what was skipped
+        on reading), listed under its name.
+        """
         self._drop_drive()
         gui = self.client.gui
         with self._lock:
@@ -112,7 +117,7 @@ class ClientSession:
         self._camera_panel.visible = True
         self._message.content = (
             f"**{_escape_markdown(name)}** — {frame_count} frames at {frame_rate_hz:.1f} Hz"
-        )
+        ) + "".join(f"\n\n- {_escape_markdown(note)}" for note in notes)
         if frame_count == 0:
             return
         with gui.add_folder("Timeline", order=2) as self._timeline:

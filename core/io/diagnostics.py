@@ -114,12 +114,6 @@ def drive_report(drive: Drive) -> DriveReport:
     if drive.manifest.can is not None:
         streams.append(stream_report("CAN speed", v.speed_t_ns))
         streams.append(stream_report("CAN yaw rate", v.yaw_rate_t_ns))
-    a = drive.manifest.assumptions
-    assumptions = tuple(
-        f"{name} = {value} (assumed, not measured)"
-        for name, value in (("speed_mps", a.speed_mps), ("yaw_rate_radps", a.yaw_rate_radps))
-        if value is not None
-    )
     return DriveReport(
         name=drive.name,
         path=str(drive.path),
@@ -134,7 +128,7 @@ def drive_report(drive: Drive) -> DriveReport:
             (float(v.speed_mps.min()), float(v.speed_mps.max())) if len(v.speed_mps) else None
         ),
         yaw_rate_bias_radps=float(getattr(v, "yaw_rate_bias_radps", 0.0)),
-        assumptions=assumptions,
+        assumptions=drive.manifest.assumptions.describe(),
         warnings=drive.warnings,
     )
 

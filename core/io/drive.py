@@ -119,6 +119,11 @@ class Drive:
         return self.manifest.groundtruth is not None
 
     @property
+    def notes(self) -> tuple[str, ...]:
+        """What a viewer should know: the manifest's assumptions, then the reading warnings."""
+        return self.manifest.assumptions.describe() + self.warnings
+
+    @property
     def frame_rate_hz(self) -> float:
         """Camera frames per second from the median frame interval; 0.0 with one frame."""
         if len(self.times_ns) < 2:

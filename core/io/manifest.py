@@ -138,6 +138,15 @@ class Assumptions:
     speed_mps: float | None = None
     yaw_rate_radps: float | None = None
 
+    def describe(self) -> tuple[str, ...]:
+        """One plain sentence per assumption, for people reading results."""
+        out = []
+        if self.speed_mps is not None:
+            out.append(f"speed {self.speed_mps:g} m/s is assumed, not measured")
+        if self.yaw_rate_radps is not None:
+            out.append(f"yaw rate {self.yaw_rate_radps:g} rad/s is assumed, not measured")
+        return tuple(out)
+
 
 @dataclass(frozen=True)
 class TimeOffsets:

@@ -41,6 +41,7 @@ class FakeDrive:
         self.camera = fake_camera()
         self.times_ns = tuple(1_000_000_000 + i * FRAME_PERIOD_NS for i in range(frames))
         self.frame_rate_hz = 1e9 / FRAME_PERIOD_NS
+        self.notes: tuple[str, ...] = ()
         self.closed = False
 
     def __len__(self) -> int:

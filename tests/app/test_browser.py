@@ -157,3 +157,26 @@ def test_frame_that_cannot_be_read_is_reported_in_the_readout(tmp_path: Path, pa
         page.get_by_text("frame 2 /").wait_for(timeout=TIMEOUT_MS)
     finally:
         server.stop()
+
+
+def test_assumptions_and_reading_warnings_are_listed_under_the_name(
+    tmp_path: Path, page: Page
+) -> None:
+    def noted(path: Path) -> FakeDrive:
+        drive = FakeDrive(frames=3, name=path.name)
+        drive.notes = (
+            "speed 27 m/s is assumed, not measured",
+            "can.log: skipped 3 lines that are not frames",
+        )
+        return drive
+
+    (tmp_path / "noted").mkdir()
+    (tmp_path / "noted" / "recording.yaml").write_text("{}\n")
+    server = start(tmp_path, None, noted)
+    try:
+        page.goto(f"http://127.0.0.1:{server.port}/")
+        camera_src(page)
+        page.get_by_text("speed 27 m/s is assumed, not measured").wait_for(timeout=TIMEOUT_MS)
+        page.get_by_text("skipped 3 lines that are not frames").wait_for(timeout=TIMEOUT_MS)
+    finally:
+        server.stop()

@@ -92,7 +92,7 @@ def test_assumed_speed_without_can(recording: Path, tmp_path: Path) -> None:
         text = format_report(drive_report(drive))
     assert (f.speed_mps, f.yaw_rate_radps) == (27.0, 0.0)
     assert f.ego == step(27.0, 0.0, 0.1)
-    assert "speed_mps = 27.0 (assumed, not measured)" in text
+    assert "speed 27 m/s is assumed, not measured" in text
     edit_manifest(folder, assumptions=None)
     with Drive(folder) as drive:
         f = drive.frame(2)
