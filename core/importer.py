@@ -62,6 +62,7 @@ from core.io.canlog import (
     id_text,
     load_dbc,
 )
+from core.io.drive import Drive
 from core.io.errors import RecordingError
 from core.io.manifest import (
     MANIFEST_NAME,
@@ -674,7 +675,10 @@ def check_out_dir(out_dir: Path) -> None:
 
 @contextmanager
 def _staging(out_dir: Path) -> Iterator[Path]:
-    """A temporary folder beside `out_dir`, renamed to it on success, removed on error."""
+    """A temporary folder beside `out_dir`, renamed to it on success, removed on error.
+
+    Success: the recording opens with Drive (RecordingError otherwise).
+    """
     check_out_dir(out_dir)
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     # mkdir, not tempfile.mkdtemp: the folder gets the user's usual permissions, not 0700.
@@ -682,6 +686,7 @@ def _staging(out_dir: Path) -> Iterator[Path]:
     tmp.mkdir()
     try:
         yield tmp
+        Drive(tmp).close()  # it must open; this also caches its index (moves keep it)
         check_out_dir(out_dir)
         if out_dir.exists():
             out_dir.rmdir()

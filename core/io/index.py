@@ -4,9 +4,10 @@ Opening a drive needs the camera's time stamps (not its images), the radar scans
 signals. `build_index` reads them from the recording's files; `load_index` returns the cached
 copy when none of those files changed, so an hour-long drive reopens in a fraction of a
 second. The cache lives under `$FUSIONSCOPE_CACHE_DIR` (default `$XDG_CACHE_HOME/fusionscope`
-or `~/.cache/fusionscope`), one `.npz` per recording, keyed by the recording's path, the size
-and modification time of each of its files, and `INDEX_VERSION`. A cache that cannot be
-written (read-only home) is skipped silently: it only saves time.
+or `~/.cache/fusionscope`), one `.npz` per recording, keyed by the name (relative to the
+recording folder), size and modification time of each file it is built from, and
+`INDEX_VERSION`; not by the folder's path, so a recording moved or renamed keeps its index.
+A cache that cannot be written (read-only home) is skipped silently: it only saves time.
 
 Camera stamps are the bag's log times, put in time order by `CameraStream`; stamps outside
 the main body of the stream (a 1970 stamp in the middle of a drive, see `core.io.timeline`)
@@ -183,7 +184,10 @@ def cache_dir() -> Path:
 
 
 def _files(manifest: Manifest) -> list[Path]:
-    """Every file the index is built from (the manifest first), sorted within each part."""
+    """Every file the index is built from (the manifest first), sorted within each part.
+
+    RecordingError when a part is missing or outside the folder (Manifest.resolve).
+    """
     m = manifest
     parts = [MANIFEST_NAME, m.camera.bag]
     for bus in [m.can.bus if m.can else None, getattr(m.radar, "bus", None)]:
@@ -193,17 +197,18 @@ def _files(manifest: Manifest) -> list[Path]:
         parts.append(m.radar.bag)
     files: list[Path] = []
     for part in parts:
-        path = m.folder / part
+        path = m.resolve(part)
         files += sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path]
     return files
 
 
 def index_key(manifest: Manifest) -> str:
-    """A hash of the recording's path, its files' sizes and times, and INDEX_VERSION."""
-    h = hashlib.sha256(f"{INDEX_VERSION}\n{manifest.folder.resolve()}\n".encode())
+    """A hash of the recording's files (relative names, sizes, times) and INDEX_VERSION."""
+    h = hashlib.sha256(f"{INDEX_VERSION}\n".encode())
     for path in _files(manifest):
         st = path.stat()
-        h.update(f"{path.name}\t{st.st_size}\t{st.st_mtime_ns}\n".encode())
+        name = path.relative_to(manifest.folder).as_posix()
+        h.update(f"{name}\t{st.st_size}\t{st.st_mtime_ns}\n".encode())
     return h.hexdigest()[:32]
 
 

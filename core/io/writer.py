@@ -37,12 +37,14 @@ from core.io.canlog import SPEED_UNITS_TO_MPS, YAW_RATE_UNITS_TO_RADPS, SignalMa
 from core.io.errors import RecordingError
 from core.io.frame import RadarTarget
 from core.io.groundtruth import FrameTruth, write_groundtruth
+from core.io.index import load_index
 from core.io.manifest import (
     MANIFEST_NAME,
     BagStream,
     CanBus,
     CanSource,
     Manifest,
+    load_manifest,
     save_manifest,
 )
 from core.io.split_bag import SplitBagWriter
@@ -266,3 +268,7 @@ class RecordingWriter:
             groundtruth=GROUNDTRUTH_NAME if self._truth is not None else None,
         )
         save_manifest(manifest, self.out_dir / MANIFEST_NAME)
+        try:  # index it now, so the first open is as quick as any (core/io/index.py)
+            load_index(load_manifest(self.out_dir))
+        except RecordingError:
+            pass  # a recording that cannot be indexed says why when it is opened

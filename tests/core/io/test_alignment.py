@@ -138,10 +138,11 @@ def test_frames_with_the_same_stamp_are_all_kept(tmp_path: Path) -> None:
         np.testing.assert_array_equal(img, image(i))
 
 
-def test_index_cache_reopens_without_reading_and_notices_changes(
+def test_index_cache_reopens_without_reading_follows_moves_and_notices_changes(
     recording: Path, tmp_path: Path
 ) -> None:
     folder = copy(recording, tmp_path)
+    edit_manifest(folder, max_radar_skew_ms=40)  # files no other test has opened
     with Drive(folder) as first:
         assert not first.index_cached
         first_ego = first.frame(1).ego
@@ -154,10 +155,13 @@ def test_index_cache_reopens_without_reading_and_notices_changes(
             second.vehicle_signals.speed_mps, first.vehicle_signals.speed_mps
         )
         assert second.frame(1).ego == first_ego
-    edit_manifest(folder, max_radar_skew_ms=30)
-    with Drive(folder) as third:
+    moved = folder.rename(tmp_path / "moved")
+    with Drive(moved) as renamed:
+        assert renamed.index_cached
+    edit_manifest(moved, max_radar_skew_ms=30)
+    with Drive(moved) as third:
         assert not third.index_cached
-    with Drive(folder, use_cache=False) as fourth:
+    with Drive(moved, use_cache=False) as fourth:
         assert not fourth.index_cached
 
 
