@@ -553,7 +553,8 @@ class CameraStream:
     log_ns: (N,) bag log time of each frame, ascending; occurrence: (N,) which of the
     messages at that same log time it is (bag order), so (log_ns, occurrence) finds a message
     again exactly; times_ns: log_ns + offset_ns; skipped: frames left out because their
-    stamps lie outside the stream's main span (timeline.main_block: a 1970 stamp mid-drive).
+    stamps lie outside the stream's main span (timeline.main_block: a 1970 stamp mid-drive);
+    backwards: how often the reader gave a stamp earlier than the one before (then sorted).
     mono16_bits: the significant bits of 16-bit images (see decode_image).
 
     Notes:
@@ -569,6 +570,7 @@ class CameraStream:
         self.mono16_bits = mono16_bits
         self.conn = bag.connection(topic, CAMERA_TYPES, "camera")
         raw_ns = bag.log_times_ns(self.conn)
+        self.backwards = int(np.count_nonzero(np.diff(raw_ns) < 0))
         in_time = raw_ns[np.argsort(raw_ns, kind="stable")]
         occurrence = np.arange(len(in_time)) - np.searchsorted(in_time, in_time, side="left")
         keep = main_block(in_time)

@@ -270,6 +270,9 @@ class FrameLog:
                 f"block {lo:.3f} s to {hi:.3f} s (gaps over {DEFAULT_MAX_GAP_NS / NS_PER_S:.0f} "
                 f"s end a block): first at t={out[0]:.6f} s"
             )
+        backwards = int(np.count_nonzero(np.diff(t[keep]) < 0))
+        if backwards:
+            warn(f"{where}: {backwards} {what} frames stamped earlier than the one before; sorted")
         order = np.argsort(t[keep], kind="stable")
         return t[keep][order], which[keep][order], values[keep][order]
 

@@ -153,6 +153,11 @@ def build_index(manifest: Manifest) -> DriveIndex:
                 f"main time span (first kept {log_ns[0] / NS_PER_S:.3f} s, "
                 f"last {log_ns[-1] / NS_PER_S:.3f} s)"
             )
+        if camera.backwards:
+            warnings.append(
+                f"{where}: {camera.backwards} frame(s) stamped earlier than the one before "
+                "in the bag; put in time order"
+            )
         radar: RadarScans | None = None
         if m.radar is not None and not isinstance(m.radar, RadarCanSource):
             rbag = bags.get(m.radar.bag)

@@ -361,6 +361,22 @@ def test_scans_out_of_time_order_are_sorted_and_reported(tmp_path: Path, kind: K
     assert "1 scan(s) stamped earlier than the scan before, sorted" in warnings[0]
 
 
+@pytest.mark.parametrize("kind", ["sqlite3", "mcap"])
+def test_camera_frames_of_a_bag_read_out_of_order_come_in_time_order(
+    tmp_path: Path, kind: Kind
+) -> None:
+    def frames(ks: range) -> list[Message]:
+        return [("/cam", IMAGE, _t(k), raw_image(_t(k), MONO8 + k, "mono8")) for k in ks]
+
+    path = write_multifile_bag(tmp_path / "bag", kind, [frames(range(2, 4)), frames(range(2))])
+    with BagReader(path) as bag:
+        stream = CameraStream(bag, None)
+        assert stream.backwards == 1
+        assert stream.times_ns.tolist() == [_t(k) for k in range(4)]
+        for k in range(4):
+            np.testing.assert_array_equal(stream.image(k), MONO8 + k)
+
+
 def test_a_ros1_topic_from_two_publishers_reads_as_one_stream(tmp_path: Path) -> None:
     # rosbag record writes one connection per publisher of a topic
     path = tmp_path / "two.bag"

@@ -190,7 +190,9 @@ def test_samples_sorted_by_time_in_si_units_with_offset(db: Database) -> None:
     decoder = VehicleSignalDecoder(db, _source(), "log", offset_ns=-500_000_000)
     frames = [_speed(db, 2.0, 36.0), _speed(db, 1.0, 18.0), _yaw(db, 1.5, 90.0)]
     s, warnings = _decode(decoder, frames)
-    assert warnings == []
+    assert warnings == [
+        "log: 1 speed and yaw-rate frames stamped earlier than the one before; sorted"
+    ]
     np.testing.assert_array_equal(s.speed_t_ns, [500_000_000, 1_500_000_000])
     np.testing.assert_allclose(s.speed_mps, [5.0, 10.0])
     np.testing.assert_allclose(s.yaw_rate_radps, [math.pi / 2])
@@ -277,10 +279,10 @@ def test_non_finite_and_undecodable_frames_are_dropped_and_reported(db: Database
     decoder = VehicleSignalDecoder(db, _source(speed=muxed, yaw_rate=gyro), "log")
     frames = [
         CanFrame(1 * NS, 0x25, False, struct.pack(">f", 2.0)),
-        CanFrame(2 * NS, 0x25, False, struct.pack(">f", math.nan)),
-        CanFrame(3 * NS, 0x25, False, struct.pack(">f", math.inf)),
         CanFrame(1 * NS, 0x26, False, bytes([1, 36])),
+        CanFrame(2 * NS, 0x25, False, struct.pack(">f", math.nan)),
         CanFrame(2 * NS, 0x26, False, bytes([5, 36])),  # no signals for multiplexer value 5
+        CanFrame(3 * NS, 0x25, False, struct.pack(">f", math.inf)),
     ]
     s, warnings = _decode(decoder, frames)
     np.testing.assert_allclose(s.yaw_rate_radps, [math.radians(2.0)])
