@@ -51,7 +51,7 @@ from core.calibrate import load_camera_info
 from core.camera import CameraModel, Extrinsics, Intrinsics
 from core.io import radar_msgs
 from core.io.bag import CAN_TYPES, RADAR_TYPES, BagReader, CameraStream
-from core.io.calibration import Calibration, RadarMount, load_calibration, save_calibration
+from core.io.calibration import Calibration, RadarMount, save_calibration
 from core.io.can_radar import natural_key
 from core.io.canfiles import iter_log_frames
 from core.io.canframe import CanFrame
@@ -71,7 +71,6 @@ from core.io.manifest import (
     CanSource,
     Manifest,
     RadarCanSource,
-    load_manifest,
     parse_manifest,
     save_manifest,
 )
@@ -728,26 +727,37 @@ def _assumption_notes(
 def _finish(
     tmp: Path,
     *,
-    name: str,
-    description: str,
-    generator: Mapping[str, Any],
+    kind: str,
+    source: Path,
+    source_text: str,
     camera: BagStream,
-    calibration: Calibration,
+    built: _BuiltCalibration,
     radar: BagStream | RadarCanSource | None,
     prepared: _PreparedCan | None,
     assumptions: Assumptions,
+    assumption_text: str,
     options: ImportOptions,
 ) -> Manifest:
-    """Copy the CAN files, write calibration and manifest, and read both back as a check."""
+    """Copy the CAN files, write calibration and manifest (checked by _staging's open).
+
+    The description: "Imported by `fusionscope import KIND` from NAME" + source_text, then
+    the calibration's, the CAN mapping's and the assumptions' descriptions.
+    """
     if prepared is not None:
         for rel, src in prepared.files.items():
             shutil.copyfile(src, tmp / rel)
-    save_calibration(calibration, tmp / CALIBRATION_NAME)
+    save_calibration(built.calibration, tmp / CALIBRATION_NAME)
+    description = _join(
+        f"Imported by `fusionscope import {kind}` from {source.name}{source_text}",
+        built.description,
+        prepared.description if prepared is not None else "",
+        assumption_text,
+    )
     manifest = Manifest(
         folder=tmp,
-        name=name,
+        name=_name(options, source),
         description=description,
-        generator=dict(generator),
+        generator={"importer": kind, "source": source.name},
         camera=camera,
         radar=radar,
         can=prepared.can if prepared is not None else None,
@@ -756,11 +766,29 @@ def _finish(
         max_radar_skew_ms=options.max_radar_skew_ms,
     )
     save_manifest(manifest, tmp / MANIFEST_NAME)
-    load_calibration(tmp / CALIBRATION_NAME)
-    return load_manifest(tmp)
+    return manifest
 
 
-# --- images ------------------------------------------------------------------------------
+def _result(
+    out_dir: Path,
+    stamps: Sequence[int],
+    size: tuple[int, int],
+    built: _BuiltCalibration,
+    manifest: Manifest,
+    notes: Sequence[str],
+) -> ImportResult:
+    """What an import wrote into `out_dir`: `stamps` of frames of `size` (width, height)."""
+    return ImportResult(
+        out_dir,
+        len(stamps),
+        size[0],
+        size[1],
+        stamps[0],
+        stamps[-1],
+        built.calibration,
+        replace(manifest, folder=out_dir),
+        tuple(notes),
+    )
 
 
 def output_size(width_px: int, source_size: tuple[int, int]) -> tuple[int, int]:
@@ -964,41 +992,27 @@ def import_video(
             if progress is not None and len(stamps) < total:
                 progress(len(stamps), len(stamps))
             clip_end_s = (stamps[-1] - sampling.start_ns) / NS_PER_S
-            description = _join(
-                f"Imported by `fusionscope import video` from {video.name} ({v.width_px}x"
-                f"{v.height_px}, {v.fps:g} fps): grey, resized to {out_size[0]}x{out_size[1]}, "
-                f"resampled to {sampling.fps:g} fps (the source frame nearest each output time), "
-                f"video time {sampling.from_s:g}-{clip_end_s:g} s; stamps are the output times "
-                f"plus {sampling.start_ns} ns.",
-                built.description,
-                prepared.description if prepared is not None else "",
-                assumption_text,
-            )
             manifest = _finish(
                 tmp,
-                name=_name(options, video),
-                description=description,
-                generator={"importer": "video", "source": video.name},
+                kind="video",
+                source=video,
+                source_text=(
+                    f" ({v.width_px}x{v.height_px}, {v.fps:g} fps): grey, resized to "
+                    f"{out_size[0]}x{out_size[1]}, resampled to {sampling.fps:g} fps (the source "
+                    f"frame nearest each output time), video time {sampling.from_s:g}-"
+                    f"{clip_end_s:g} s; stamps are the output times plus {sampling.start_ns} ns."
+                ),
                 camera=BagStream(BAG_DIR, CAMERA_TOPIC),
-                calibration=built.calibration,
+                built=built,
                 radar=prepared.radar if prepared is not None else None,
                 prepared=prepared,
                 assumptions=assumptions,
+                assumption_text=assumption_text,
                 options=options,
             )
     finally:
         v.capture.release()
-    return ImportResult(
-        out_dir,
-        len(stamps),
-        out_size[0],
-        out_size[1],
-        stamps[0],
-        stamps[-1],
-        built.calibration,
-        replace(manifest, folder=out_dir),
-        tuple(notes),
-    )
+    return _result(out_dir, stamps, out_size, built, manifest, notes)
 
 
 def _join(*parts: str) -> str:
@@ -1048,37 +1062,23 @@ def import_still(
         bag = _camera_bag(tmp)
         bag.write(CAMERA_TOPIC, t_ns, png_image_message(radar_msgs.typestore(), t_ns, image))
         bag.close()
-        description = _join(
-            f"Imported by `fusionscope import still` from {image_path.name} "
-            f"({source_size[0]}x{source_size[1]}): one frame at {t_ns / NS_PER_S:.3f} s, grey, "
-            f"resized to {out_size[0]}x{out_size[1]}.",
-            built.description,
-            prepared.description if prepared is not None else "",
-            assumption_text,
-        )
         manifest = _finish(
             tmp,
-            name=_name(options, image_path),
-            description=description,
-            generator={"importer": "still", "source": image_path.name},
+            kind="still",
+            source=image_path,
+            source_text=(
+                f" ({source_size[0]}x{source_size[1]}): one frame at {t_ns / NS_PER_S:.3f} s, "
+                f"grey, resized to {out_size[0]}x{out_size[1]}."
+            ),
             camera=BagStream(BAG_DIR, CAMERA_TOPIC),
-            calibration=built.calibration,
+            built=built,
             radar=prepared.radar if prepared is not None else None,
             prepared=prepared,
             assumptions=assumptions,
+            assumption_text=assumption_text,
             options=options,
         )
-    return ImportResult(
-        out_dir,
-        1,
-        out_size[0],
-        out_size[1],
-        t_ns,
-        t_ns,
-        built.calibration,
-        replace(manifest, folder=out_dir),
-        tuple(notes),
-    )
+    return _result(out_dir, [t_ns], out_size, built, manifest, notes)
 
 
 def _radar_topic(reader: BagReader, topic: str | None, mapped: bool) -> tuple[str | None, str]:
@@ -1163,34 +1163,20 @@ def import_bag(
             if progress is not None:
                 progress(1, 1)
         radar_text = f" Radar from topic {radar_found}." if isinstance(radar, BagStream) else ""
-        description = _join(
-            f"Imported by `fusionscope import bag` from {bag_name}: camera topic "
-            f"{stream.conn.topic} ({len(times_ns)} frames, {size[0]}x{size[1]}), copied as is."
-            + radar_text,
-            built.description,
-            prepared.description if prepared is not None else "",
-            assumption_text,
-        )
         manifest = _finish(
             tmp,
-            name=_name(options, bag_path),
-            description=description,
-            generator={"importer": "bag", "source": bag_name},
+            kind="bag",
+            source=bag_path,
+            source_text=(
+                f": camera topic {stream.conn.topic} ({len(times_ns)} frames, "
+                f"{size[0]}x{size[1]}), copied as is.{radar_text}"
+            ),
             camera=BagStream(bag_name, stream.conn.topic),
-            calibration=built.calibration,
+            built=built,
             radar=radar,
             prepared=prepared,
             assumptions=assumptions,
+            assumption_text=assumption_text,
             options=options,
         )
-    return ImportResult(
-        out_dir,
-        len(times_ns),
-        size[0],
-        size[1],
-        times_ns[0],
-        times_ns[-1],
-        built.calibration,
-        replace(manifest, folder=out_dir),
-        tuple(notes),
-    )
+    return _result(out_dir, times_ns, size, built, manifest, notes)
