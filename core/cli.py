@@ -352,12 +352,15 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 
 
 def _image_size_args(p: argparse.ArgumentParser) -> None:
+    from core.importer import DEFAULT_WIDTH_PX
+
     p.add_argument(
         "--width",
         metavar="PX",
         type=_int_at_least(1),
-        default=640,
-        help="output width in px; the height follows the aspect ratio (default: 640, paper 001)",
+        default=DEFAULT_WIDTH_PX,
+        help="output width in px; the height follows the aspect ratio (default: %(default)s, "
+        "paper 001)",
     )
 
 
@@ -385,6 +388,8 @@ def _can_args(p: argparse.ArgumentParser, from_bag: bool) -> None:
 
 
 def _common_import_args(p: argparse.ArgumentParser) -> None:
+    from core.importer import DEFAULT_CAMERA_HEIGHT_M, DEFAULT_CAMERA_X_M
+
     g = p.add_argument_group("camera intrinsics (exactly one way)")
     g.add_argument(
         "--camera-info", metavar="FILE", help="ROS camera_info YAML (as calibrate writes)"
@@ -406,15 +411,15 @@ def _common_import_args(p: argparse.ArgumentParser) -> None:
         "--camera-height-m",
         metavar="M",
         type=_positive,
-        default=1.2,
-        help="camera above the road (default: 1.2)",
+        default=DEFAULT_CAMERA_HEIGHT_M,
+        help="camera above the road (default: %(default)s)",
     )
     m.add_argument(
         "--camera-x-m",
         metavar="M",
         type=_finite,
-        default=1.5,
-        help="camera ahead of the reference point (default: 1.5)",
+        default=DEFAULT_CAMERA_X_M,
+        help="camera ahead of the reference point (default: %(default)s)",
     )
     m.add_argument(
         "--pitch-rad", metavar="RAD", type=_finite, default=0.0, help="camera pitch, down positive"
@@ -461,7 +466,7 @@ def _common_import_args(p: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from core.importer import MAPPING_EXAMPLE
+    from core.importer import DEFAULT_FPS, MAPPING_EXAMPLE
     from core.synth.scenarios import SCENARIOS
 
     parser = argparse.ArgumentParser(
@@ -547,8 +552,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--fps",
         metavar="HZ",
         type=_positive,
-        default=10.0,
-        help="output frame rate (default: 10, paper 002)",
+        default=DEFAULT_FPS,
+        help="output frame rate (default: %(default)s, paper 002)",
     )
     video.add_argument(
         "--start-ns",
