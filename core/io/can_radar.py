@@ -17,18 +17,17 @@ import numpy as np
 import numpy.typing as npt
 from cantools.database.can import Database, Message
 
-from core.io.canframe import CanFrame
 from core.io.canlog import (
     NS_PER_S,
+    FrameDecoder,
     FrameLog,
-    Traffic,
     Warn,
     check_signals,
     id_text,
     missing_frames_warning,
 )
 from core.io.errors import RecordingError
-from core.io.manifest import CanBus, RadarCanSource, RadarField
+from core.io.manifest import RadarCanSource, RadarField
 from core.io.radarscans import RadarScans
 
 FloatArray = npt.NDArray[np.float64]
@@ -56,7 +55,7 @@ def radar_messages(db: Database, pattern: str, where: str) -> list[Message]:
     return sorted(family, key=lambda m: natural_key(m.name))
 
 
-class RadarCanDecoder:
+class RadarCanDecoder(FrameDecoder):
     """Radar tracks of a `RadarCanSource` from the frames of one pass, as RadarScans.
 
     where: names the source in messages; offset_ns: added to every stamp (the recording's
@@ -100,33 +99,14 @@ class RadarCanDecoder:
         signals = [f.signal for f in self._fields if f is not None]
         for message in self._family:
             check_signals(message, signals, where)
-        self._log = FrameLog(self._family, [f.signal if f else "" for f in self._fields])
-        self._traffic: Traffic = {}
-
-    @property
-    def bus(self) -> CanBus:
-        return self.source.bus
-
-    @property
-    def ids(self) -> frozenset[tuple[int, bool]]:
-        """(arbitration id, extended) of the family's messages."""
-        return frozenset(self._log.keys)
+        super().__init__(
+            source.bus, FrameLog(self._family, [f.signal if f else "" for f in self._fields])
+        )
 
     @property
     def messages(self) -> tuple[Message, ...]:
         """The family, in slot order."""
         return self._log.messages
-
-    def wants(self, frame: CanFrame) -> bool:
-        channel = self.source.bus.channel
-        key = (frame.arbitration_id, frame.is_extended)
-        return (channel is None or frame.channel == channel) and key in self._log.keys
-
-    def feed(self, frame: CanFrame) -> None:
-        self._log.feed(frame)
-
-    def note_traffic(self, traffic: Traffic) -> None:
-        self._traffic = traffic
 
     def result(self, warn: Warn) -> RadarScans:
         """All scans of the log, ascending in time (stamps plus offset_ns)."""

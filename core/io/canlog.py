@@ -20,7 +20,7 @@ from collections import Counter
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 import cantools
 import numpy as np
@@ -165,23 +165,6 @@ Traffic = Mapping[tuple[str | None, int, bool], int]
 """Frames seen per (channel, arbitration id, extended flag)."""
 
 
-class FrameDecoder(Protocol):
-    """What `decode_frames` feeds: a decoder of some messages on one bus."""
-
-    @property
-    def bus(self) -> CanBus: ...
-
-    def wants(self, frame: CanFrame) -> bool:
-        """Whether to feed `frame`; a function of its channel, id and extended flag only."""
-        ...
-
-    def feed(self, frame: CanFrame) -> None: ...
-
-    def note_traffic(self, traffic: Traffic) -> None:
-        """The frames the log carried, for a helpful warning when none was wanted."""
-        ...
-
-
 @dataclass(slots=True)
 class _Route:
     decoders: tuple[FrameDecoder, ...]
@@ -277,6 +260,42 @@ class FrameLog:
         return t[keep][order], which[keep][order], values[keep][order]
 
 
+class FrameDecoder:
+    """What `decode_frames` feeds: the frames of some DBC messages on one bus, in a FrameLog.
+
+    This part decides which frames to take (the bus's channel, the messages' ids) and keeps
+    the traffic decode_frames counted, for the warning when none came; subclasses turn the
+    log into their result.
+    """
+
+    def __init__(self, bus: CanBus, log: FrameLog) -> None:
+        self._bus = bus
+        self._log = log
+        self._traffic: Traffic = {}
+
+    @property
+    def bus(self) -> CanBus:
+        return self._bus
+
+    @property
+    def ids(self) -> frozenset[tuple[int, bool]]:
+        """(arbitration id, extended) of the messages decoded."""
+        return frozenset(self._log.keys)
+
+    def wants(self, frame: CanFrame) -> bool:
+        """Whether to feed `frame`; a function of its channel, id and extended flag only."""
+        channel = self._bus.channel
+        key = (frame.arbitration_id, frame.is_extended)
+        return (channel is None or frame.channel == channel) and key in self._log.keys
+
+    def feed(self, frame: CanFrame) -> None:
+        self._log.feed(frame)
+
+    def note_traffic(self, traffic: Traffic) -> None:
+        """The frames the log carried, per (channel, id, extended)."""
+        self._traffic = traffic
+
+
 def _number(value: object) -> float:
     return float(value) if isinstance(value, (int, float)) else math.nan
 
@@ -305,7 +324,7 @@ def missing_frames_warning(
     return text + f"; the most frequent ids there: {listing} (is the DBC the log's?)"
 
 
-class VehicleSignalDecoder:
+class VehicleSignalDecoder(FrameDecoder):
     """Speed and yaw rate of a `CanSource` from the frames of one pass (see decode_frames).
 
     where: names the source in messages (the log file, the manifest section); offset_ns:
@@ -339,31 +358,10 @@ class VehicleSignalDecoder:
         speed = find_signal(db, source.speed, where)
         yaw = find_signal(db, source.yaw_rate, where)
         messages = [speed] if yaw.frame_id == speed.frame_id else [speed, yaw]
-        self._log = FrameLog(messages, (source.speed.signal, source.yaw_rate.signal))
+        super().__init__(
+            source.bus, FrameLog(messages, (source.speed.signal, source.yaw_rate.signal))
+        )
         self._speed_i, self._yaw_i = 0, len(messages) - 1
-        self._traffic: Traffic = {}
-
-    @property
-    def bus(self) -> CanBus:
-        return self.source.bus
-
-    @property
-    def ids(self) -> frozenset[tuple[int, bool]]:
-        """(arbitration id, extended) of the messages decoded."""
-        return frozenset(self._log.keys)
-
-    def wants(self, frame: CanFrame) -> bool:
-        channel = self.source.bus.channel
-        return (channel is None or frame.channel == channel) and (
-            frame.arbitration_id,
-            frame.is_extended,
-        ) in self._log.keys
-
-    def feed(self, frame: CanFrame) -> None:
-        self._log.feed(frame)
-
-    def note_traffic(self, traffic: Traffic) -> None:
-        self._traffic = traffic
 
     def result(self, warn: Warn) -> VehicleSignals:
         """Samples of both quantities, sorted, SI units and the engine's signs, bias removed."""
