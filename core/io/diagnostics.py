@@ -127,7 +127,7 @@ def drive_report(drive: Drive) -> DriveReport:
         speed_range_mps=(
             (float(v.speed_mps.min()), float(v.speed_mps.max())) if len(v.speed_mps) else None
         ),
-        yaw_rate_bias_radps=float(getattr(v, "yaw_rate_bias_radps", 0.0)),
+        yaw_rate_bias_radps=v.yaw_rate_bias_radps,
         assumptions=drive.manifest.assumptions.describe(),
         warnings=drive.warnings,
     )

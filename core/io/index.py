@@ -115,8 +115,10 @@ def _decode_can(
         return load_dbc([m.resolve(d) for d in bus.dbc])
 
     def where(section: str, bus: CanBus) -> str:
-        source = f"log {bus.log}" if bus.log is not None else f"bag {bus.bag}"
-        return f"{m.folder / MANIFEST_NAME}: {section} ({source}, DBC {', '.join(bus.dbc)})"
+        kind = "log" if bus.log is not None else "bag"
+        return (
+            f"{m.folder / MANIFEST_NAME}: {section} ({kind} {bus.file}, DBC {', '.join(bus.dbc)})"
+        )
 
     if m.can is not None:
         vehicle = VehicleSignalDecoder(
@@ -195,11 +197,13 @@ def _files(manifest: Manifest) -> list[Path]:
     """
     m = manifest
     parts = [MANIFEST_NAME, m.camera.bag]
-    for bus in [m.can.bus if m.can else None, getattr(m.radar, "bus", None)]:
-        if bus is not None:
-            parts += [*bus.dbc, bus.log or bus.bag or ""]
-    if m.radar is not None and not isinstance(m.radar, RadarCanSource):
+    buses = [m.can.bus] if m.can is not None else []
+    if isinstance(m.radar, RadarCanSource):
+        buses.append(m.radar.bus)
+    elif m.radar is not None:
         parts.append(m.radar.bag)
+    for bus in buses:
+        parts += [*bus.dbc, bus.file]
     files: list[Path] = []
     for part in parts:
         path = m.resolve(part)

@@ -93,6 +93,11 @@ class CanBus:
         if (self.log is None) == (self.bag is None):
             raise ValueError(f"CanBus: expected exactly one of log and bag, got {self}")
 
+    @property
+    def file(self) -> str:
+        """The log or the bag, whichever the frames come from (relative path)."""
+        return self.log if self.log is not None else str(self.bag)
+
 
 @dataclass(frozen=True)
 class CanSource:
