@@ -108,10 +108,14 @@ def _interp(t_ns: npt.ArrayLike, ts_ns: Int64Array, values: FloatArray) -> Float
     t = np.asarray(t_ns, dtype=np.int64)
     if len(ts_ns) == 0:
         return np.full(t.shape, np.nan)
-    # Relative to the first sample so that float64 keeps nanosecond resolution.
-    return np.interp(
-        (t - ts_ns[0]).astype(np.float64), (ts_ns - ts_ns[0]).astype(np.float64), values
-    )
+    if t.size == 0:
+        return np.zeros(t.shape)
+    # Only the samples around t (a frame's lookup in an hour of CAN stays cheap), relative to
+    # the first of them so that float64 keeps nanosecond resolution.
+    lo = max(int(np.searchsorted(ts_ns, t.min(), side="right")) - 1, 0)
+    hi = min(int(np.searchsorted(ts_ns, t.max(), side="left")) + 1, len(ts_ns))
+    ts, vs = ts_ns[lo:hi], values[lo:hi]
+    return np.interp((t - ts[0]).astype(np.float64), (ts - ts[0]).astype(np.float64), vs)
 
 
 # --- DBC ----------------------------------------------------------------------------------
