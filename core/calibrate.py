@@ -7,10 +7,10 @@ is fitted to all views together (`cv2.calibrateCamera`).
 
     views = read_views(Path("chessboard/"))            # the only I/O: image files -> grey
     result = calibrate_chessboard(views, Chessboard(9, 6, square_m=0.025))
-    save_camera_info(result.intrinsics, Path("camera_info.yaml"), camera_name="front")
+    save_camera_info(result.intrinsics, Path("camera_info.yaml"), camera_name="front")  # core.io
 
-camera_info YAML (ROS camera_calibration_parsers' layout; `fusionscope import --camera-info`
-reads it back with `load_camera_info`):
+camera_info YAML (ROS camera_calibration_parsers' layout, written and read by
+core/io/calibration.py; `fusionscope import --camera-info` reads it back):
 
     image_width: 1280
     image_height: 720
@@ -38,16 +38,12 @@ from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import cv2
 import numpy as np
 import numpy.typing as npt
-import yaml
 
 from core.camera import Intrinsics
-from core.io.errors import RecordingError
-from core.io.yamlfile import Fields, load_yaml_mapping
 
 FloatArray = npt.NDArray[np.float64]
 GreyImage = npt.NDArray[np.uint8]
@@ -56,9 +52,6 @@ GreyImage = npt.NDArray[np.uint8]
 # and the distortion are not constrained (Zhang 2000, section 3.1).
 MIN_VIEWS = 3
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
-PLUMB_BOB = "plumb_bob"
-RATIONAL_POLYNOMIAL = "rational_polynomial"
-DISTORTION_MODELS = {PLUMB_BOB: (0, 4, 5), RATIONAL_POLYNOMIAL: (8,)}
 
 
 @dataclass(frozen=True)
@@ -314,95 +307,3 @@ def read_views(folder: Path) -> list[tuple[str, GreyImage]]:
             raise ValueError(f"{p}: cannot decode the image; expected a readable image file")
         views.append((p.name, np.asarray(img, dtype=np.uint8)))
     return views
-
-
-# --- camera_info YAML ----------------------------------------------------------------------
-
-
-def camera_info_to_dict(intrinsics: Intrinsics, camera_name: str) -> dict[str, Any]:
-    """The YAML-ready mapping of a ROS camera_info file (layout in the module docstring)."""
-    i = intrinsics
-    model = RATIONAL_POLYNOMIAL if len(i.distortion) == 8 else PLUMB_BOB
-    distortion = list(i.distortion) if i.distortion else [0.0] * 5
-    return {
-        "image_width": i.width_px,
-        "image_height": i.height_px,
-        "camera_name": camera_name,
-        "camera_matrix": {"rows": 3, "cols": 3, "data": [float(v) for v in i.K.ravel()]},
-        "distortion_model": model,
-        "distortion_coefficients": {
-            "rows": 1,
-            "cols": len(distortion),
-            "data": [float(v) for v in distortion],
-        },
-        "rectification_matrix": {
-            "rows": 3,
-            "cols": 3,
-            "data": [float(v) for v in np.eye(3).ravel()],
-        },
-        "projection_matrix": {
-            "rows": 3,
-            "cols": 4,
-            "data": [float(v) for v in np.hstack([i.K, np.zeros((3, 1))]).ravel()],
-        },
-    }
-
-
-def save_camera_info(intrinsics: Intrinsics, path: Path, camera_name: str = "camera") -> None:
-    path.write_text(
-        yaml.safe_dump(
-            camera_info_to_dict(intrinsics, camera_name), sort_keys=False, default_flow_style=None
-        ),
-        encoding="utf-8",
-    )
-
-
-def load_camera_info(path: Path) -> Intrinsics:
-    """Intrinsics (size, camera matrix, distortion) of a ROS camera_info YAML file.
-
-    RecordingError naming the file and the key on bad input; distortion models other than
-    plumb_bob and rational_polynomial are refused (the engine's camera model has no others).
-    """
-    f = Fields(path, load_yaml_mapping(path, "camera_info file"))
-    f.check_keys(
-        {"image_width", "image_height", "camera_matrix"},
-        {
-            "camera_name",
-            "distortion_model",
-            "distortion_coefficients",
-            "rectification_matrix",
-            "projection_matrix",
-        },
-    )
-    m = f.sub("camera_matrix")
-    m.check_keys({"data"}, {"rows", "cols"})
-    K = m.floats("data", 9)
-    distortion: tuple[float, ...] = ()
-    if f.has("distortion_coefficients"):
-        d = f.sub("distortion_coefficients")
-        d.check_keys({"data"}, {"rows", "cols"})
-        distortion = d.floats("data")
-    model = f.raw.get("distortion_model") or PLUMB_BOB
-    if model not in DISTORTION_MODELS:
-        raise f.fail("distortion_model", " or ".join(DISTORTION_MODELS), model)
-    if all(v == 0.0 for v in distortion):
-        distortion = ()
-    if len(distortion) not in DISTORTION_MODELS[model]:
-        expected = " or ".join(str(n) for n in DISTORTION_MODELS[model] if n)
-        raise f.fail(
-            "distortion_coefficients.data", f"{expected} coefficients for {model}", distortion
-        )
-    if K[1] != 0.0 or K[3] != 0.0 or K[6:] != (0.0, 0.0, 1.0):
-        raise f.fail("camera_matrix.data", "[fx, 0, cx, 0, fy, cy, 0, 0, 1]", list(K))
-    try:
-        return Intrinsics(
-            fx_px=K[0],
-            fy_px=K[4],
-            cx_px=K[2],
-            cy_px=K[5],
-            width_px=f.int_("image_width"),
-            height_px=f.int_("image_height"),
-            distortion=distortion,
-        )
-    except ValueError as err:
-        raise RecordingError(f"{path}: {err}") from err

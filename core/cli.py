@@ -89,12 +89,8 @@ class _UsageError(Exception):
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
-    from core.calibrate import (
-        Chessboard,
-        calibrate_chessboard,
-        read_views,
-        save_camera_info,
-    )
+    from core.calibrate import Chessboard, calibrate_chessboard, read_views
+    from core.io.calibration import save_camera_info
     from core.io.errors import RecordingError
 
     out = Path(args.out)

@@ -47,11 +47,10 @@ import numpy as np
 import numpy.typing as npt
 from cantools.database.can import Database, Message
 
-from core.calibrate import load_camera_info
 from core.camera import CameraModel, Extrinsics, Intrinsics
 from core.io import radar_msgs
 from core.io.bag import CAN_TYPES, RADAR_TYPES, BagReader, CameraStream
-from core.io.calibration import Calibration, RadarMount, save_calibration
+from core.io.calibration import Calibration, RadarMount, load_camera_info, save_calibration
 from core.io.can_radar import natural_key
 from core.io.canfiles import iter_log_frames
 from core.io.canframe import CanFrame

@@ -1,4 +1,5 @@
-"""`calibration.yaml`: the camera (ROS camera_info style intrinsics + pose) and the radar mount.
+"""`calibration.yaml`: the camera (ROS camera_info style intrinsics + pose) and the radar mount;
+and ROS camera_info files themselves (`fusionscope calibrate` writes them, import reads them).
 
 Layout (format_version 1):
 
@@ -23,6 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import yaml
 
 from core.camera import CameraModel, Extrinsics, Intrinsics
@@ -30,6 +32,10 @@ from core.io.errors import RecordingError
 from core.io.yamlfile import Fields, load_yaml_mapping
 
 CALIBRATION_FORMAT_VERSION = 1
+PLUMB_BOB = "plumb_bob"
+RATIONAL_POLYNOMIAL = "rational_polynomial"
+# Coefficient counts each distortion model may have (0: no distortion).
+DISTORTION_MODELS = {PLUMB_BOB: (0, 4, 5), RATIONAL_POLYNOMIAL: (8,)}
 
 
 @dataclass(frozen=True)
@@ -94,13 +100,6 @@ def save_calibration(cal: Calibration, path: Path | str) -> None:
     )
 
 
-def _matrix(f: Fields, name: str, rows: int | None, cols: int | None) -> tuple[float, ...]:
-    m = f.sub(name)
-    m.check_keys({"data"}, {"rows", "cols"})
-    n = None if rows is None or cols is None else rows * cols
-    return m.floats("data", n)
-
-
 def load_calibration(path: Path | str) -> Calibration:
     """Read `calibration.yaml`; RecordingError names the file and the key on bad input."""
     p = Path(path)
@@ -109,20 +108,7 @@ def load_calibration(path: Path | str) -> Calibration:
     if f.raw.get("format_version", CALIBRATION_FORMAT_VERSION) != CALIBRATION_FORMAT_VERSION:
         raise f.fail("format_version", str(CALIBRATION_FORMAT_VERSION), f.raw["format_version"])
 
-    c = f.sub("camera")
-    c.check_keys(
-        {"image_width", "image_height", "camera_matrix"},
-        {"distortion_model", "distortion_coefficients", "camera_name"},
-    )
-    K = _matrix(c, "camera_matrix", 3, 3)
-    distortion = (
-        _matrix(c, "distortion_coefficients", None, None)
-        if c.has("distortion_coefficients")
-        else ()
-    )
-    if all(v == 0.0 for v in distortion):
-        distortion = ()
-
+    intrinsics = intrinsics_from_camera_info(f.sub("camera"))
     e = f.sub("extrinsics")
     e.check_keys({"height_m"}, {"x_m", "y_m", "pitch_rad", "yaw_rad", "roll_rad"})
     r = f.sub("radar_mount")
@@ -138,15 +124,6 @@ def load_calibration(path: Path | str) -> Calibration:
         return fields.float_(name) if name in fields.raw else 0.0
 
     try:
-        intrinsics = Intrinsics(
-            fx_px=K[0],
-            fy_px=K[4],
-            cx_px=K[2],
-            cy_px=K[5],
-            width_px=c.int_("image_width"),
-            height_px=c.int_("image_height"),
-            distortion=distortion,
-        )
         extrinsics = Extrinsics(
             height_m=e.float_("height_m"),
             x_m=opt(e, "x_m"),
@@ -160,3 +137,97 @@ def load_calibration(path: Path | str) -> Calibration:
     except ValueError as err:
         raise RecordingError(f"{p}: {err}") from err
     return Calibration(camera, mount)
+
+
+# --- ROS camera_info files ---------------------------------------------------------------
+def camera_info_to_dict(intrinsics: Intrinsics, camera_name: str) -> dict[str, Any]:
+    """The YAML-ready mapping of a ROS camera_info file (layout in the module docstring)."""
+    i = intrinsics
+    model = RATIONAL_POLYNOMIAL if len(i.distortion) == 8 else PLUMB_BOB
+    distortion = list(i.distortion) if i.distortion else [0.0] * 5
+    return {
+        "image_width": i.width_px,
+        "image_height": i.height_px,
+        "camera_name": camera_name,
+        "camera_matrix": {"rows": 3, "cols": 3, "data": [float(v) for v in i.K.ravel()]},
+        "distortion_model": model,
+        "distortion_coefficients": {
+            "rows": 1,
+            "cols": len(distortion),
+            "data": [float(v) for v in distortion],
+        },
+        "rectification_matrix": {
+            "rows": 3,
+            "cols": 3,
+            "data": [float(v) for v in np.eye(3).ravel()],
+        },
+        "projection_matrix": {
+            "rows": 3,
+            "cols": 4,
+            "data": [float(v) for v in np.hstack([i.K, np.zeros((3, 1))]).ravel()],
+        },
+    }
+
+
+def save_camera_info(intrinsics: Intrinsics, path: Path, camera_name: str = "camera") -> None:
+    path.write_text(
+        yaml.safe_dump(
+            camera_info_to_dict(intrinsics, camera_name), sort_keys=False, default_flow_style=None
+        ),
+        encoding="utf-8",
+    )
+
+
+def load_camera_info(path: Path) -> Intrinsics:
+    """Intrinsics (size, camera matrix, distortion) of a ROS camera_info YAML file."""
+    return intrinsics_from_camera_info(Fields(path, load_yaml_mapping(path, "camera_info file")))
+
+
+def intrinsics_from_camera_info(f: Fields) -> Intrinsics:
+    """Intrinsics of a ROS camera_info mapping (a file, or calibration.yaml's `camera`).
+
+    RecordingError naming the file and the key on bad input; distortion models other than
+    plumb_bob and rational_polynomial are refused (the engine's camera model has no others).
+    """
+    f.check_keys(
+        {"image_width", "image_height", "camera_matrix"},
+        {
+            "camera_name",
+            "distortion_model",
+            "distortion_coefficients",
+            "rectification_matrix",
+            "projection_matrix",
+        },
+    )
+    m = f.sub("camera_matrix")
+    m.check_keys({"data"}, {"rows", "cols"})
+    K = m.floats("data", 9)
+    distortion: tuple[float, ...] = ()
+    if f.has("distortion_coefficients"):
+        d = f.sub("distortion_coefficients")
+        d.check_keys({"data"}, {"rows", "cols"})
+        distortion = d.floats("data")
+    model = f.raw.get("distortion_model") or PLUMB_BOB
+    if model not in DISTORTION_MODELS:
+        raise f.fail("distortion_model", " or ".join(DISTORTION_MODELS), model)
+    if all(v == 0.0 for v in distortion):
+        distortion = ()
+    if len(distortion) not in DISTORTION_MODELS[model]:
+        expected = " or ".join(str(n) for n in DISTORTION_MODELS[model] if n)
+        raise f.fail(
+            "distortion_coefficients.data", f"{expected} coefficients for {model}", distortion
+        )
+    if K[1] != 0.0 or K[3] != 0.0 or K[6:] != (0.0, 0.0, 1.0):
+        raise f.fail("camera_matrix.data", "[fx, 0, cx, 0, fy, cy, 0, 0, 1]", list(K))
+    try:
+        return Intrinsics(
+            fx_px=K[0],
+            fy_px=K[4],
+            cx_px=K[2],
+            cy_px=K[5],
+            width_px=f.int_("image_width"),
+            height_px=f.int_("image_height"),
+            distortion=distortion,
+        )
+    except ValueError as err:
+        raise RecordingError(f"{f.path}: {f.where or 'camera_info'}: {err}") from err

@@ -11,15 +11,10 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 
-from core.calibrate import (
-    Chessboard,
-    calibrate_chessboard,
-    load_camera_info,
-    read_views,
-    save_camera_info,
-)
+from core.calibrate import Chessboard, calibrate_chessboard, read_views
 from core.camera import Intrinsics
 from core.cli import main
+from core.io.calibration import load_camera_info, save_camera_info
 from core.io.errors import RecordingError
 
 # The camera the synthetic views are rendered with (the answer the tests recover).

@@ -19,11 +19,11 @@ from rosbags.rosbag2 import StoragePlugin
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
-from core.calibrate import save_camera_info
 from core.camera import Intrinsics
 from core.cli import main
 from core.importer import MAPPING_EXAMPLE, scale_intrinsics
 from core.io import Drive, load_calibration, load_manifest, radar_msgs
+from core.io.calibration import save_camera_info
 from core.io.manifest import BagStream, RadarCanSource
 from core.io.writer import png_image_message, vehicle_dbc_path
 
