@@ -41,16 +41,34 @@ class EgoMotion:
     dt_s: float
     pieces: int = 1
 
+    def __post_init__(self) -> None:
+        for name in ("dx_m", "dy_m", "dyaw_rad", "dt_s"):
+            _finite(name, getattr(self, name))
+        if self.dt_s < 0:
+            raise ValueError(f"dt_s: expected an interval >= 0, got {self.dt_s}")
+
     @classmethod
     def still(cls, dt_s: float = 0.0) -> EgoMotion:
         return cls(0.0, 0.0, 0.0, dt_s, 1)
+
+
+def _finite(name: str, value: float) -> None:
+    if not math.isfinite(value):
+        raise ValueError(f"{name}: expected a finite number, got {value!r}")
 
 
 def chord_length_m(speed_mps: float, yaw_rate_radps: float, dt_s: float) -> float:
     """Eq. (5): S = 2 v / gamma * sin(gamma T / 2), written as v T sinc(gamma T / 2).
 
     The sinc form has no division, so it is exact and continuous through gamma = 0.
+    ValueError naming the argument when one is not finite (an unknown yaw rate is NaN).
     """
+    for name, value in (
+        ("speed_mps", speed_mps),
+        ("yaw_rate_radps", yaw_rate_radps),
+        ("dt_s", dt_s),
+    ):
+        _finite(name, value)
     half_turn_rad = yaw_rate_radps * dt_s / 2.0
     return speed_mps * dt_s * float(np.sinc(half_turn_rad / math.pi))
 

@@ -82,3 +82,12 @@ def test_signals_held_past_their_ends_and_degenerate_inputs() -> None:
     empty = np.zeros(0, dtype=np.int64)
     with pytest.raises(ValueError, match="at least one sample"):
         integrate(0, S, empty, np.zeros(0), one, np.array([0.0]))
+
+
+@pytest.mark.parametrize("bad", ["speed_mps", "yaw_rate_radps", "dt_s"])
+def test_a_missing_signal_is_a_clear_error(bad: str) -> None:
+    args = {"speed_mps": 10.0, "yaw_rate_radps": 0.1, "dt_s": 0.1, bad: math.nan}
+    with pytest.raises(ValueError, match=f"{bad}: expected a finite number, got nan"):
+        step(**args)
+    with pytest.raises(ValueError, match="dyaw_rad: expected a finite number"):
+        EgoMotion(1.0, 0.0, math.nan, 0.1)
