@@ -78,9 +78,26 @@ class MotionStereoParams:
     threshold_xi: float = 20.0  # paper 000: threshold xi on the local mean m_i (grey levels)
     weight_obstacle: float = 0.25  # paper 000 eq. 7, w_i when m_i > xi
     weight_free: float = 1.0  # paper 000 eq. 7, w_i when m_i < xi
+    # beyond the paper: D's connected regions smaller than this are not obstacle regions
+    min_region_m2: float = 0.1
+    # beyond the paper: slower than this over a frame interval the ego car stands still and
+    # motion stereo is background subtraction (as core.io.canlog.STANDSTILL_SPEED_MPS)
+    standstill_speed_mps: float = 0.05
 
     def __post_init__(self) -> None:
         _positive(self, "x_max_m", "y_half_width_m", "cell_m", "threshold_xi")
+        _check(
+            math.isfinite(self.min_region_m2) and self.min_region_m2 >= 0,
+            "min_region_m2",
+            "an area >= 0",
+            self.min_region_m2,
+        )
+        _check(
+            math.isfinite(self.standstill_speed_mps) and self.standstill_speed_mps >= 0,
+            "standstill_speed_mps",
+            "a speed >= 0",
+            self.standstill_speed_mps,
+        )
         _check(
             0 <= self.x_min_m < self.x_max_m,
             "x_min_m",
