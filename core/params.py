@@ -47,17 +47,56 @@ class PitchParams:
 
     # |vertical Sobel| above this is an edge (paper: "a given threshold")
     sobel_threshold: float = 60.0
+    # edges are read from this many rows above the calibrated vanishing point down (the
+    # paper starts "from the bottom part of the image"; the sky above holds no road lines)
+    rows_above_vp_px: int = 10
+    # the row histogram of horizon tracking starts this far above it (far things, which
+    # do not move as the car drives, make the steadiest reference)
+    tracking_rows_above_vp_px: int = 40
+    # edges are clustered on every row_step_px-th row (1: every row, as the paper)
+    row_step_px: int = 3
     min_cluster_px: int = 40  # paper 000: "40 pixels in the current setup"
     merge_angle_rad: float = 0.02  # paper 000: "a 0.02 radians threshold"
+    # lines closer than this to the image vertical are poles, trunks, vehicle sides: no vote
+    min_tilt_rad: float = 0.05
     lines_kept: int = 7  # paper 000: "only the 7 lines with the highest confidence"
     vp_region_px: float = 40.0  # half-size of the region around the calibrated vanishing point
+    # intersection weight also x sin(crossing angle) (False: the paper's min confidence alone)
+    weight_by_crossing_angle: bool = True
+    # an intersection may lie this far inside a segment's rows and still be a vanishing point
+    segment_margin_px: float = 5.0
     min_confidence: float = 200.0  # below this summed weight, horizon tracking takes over
-    max_tracking_offset_px: int = 20  # largest row shift searched by horizon tracking
+    # ... and above this weighted RMS distance of the intersections from their mean (curves)
+    max_spread_px: float = 6.0
+    # largest row shift per frame searched by horizon tracking (~0.3 deg at 10 fps)
+    max_tracking_offset_px: int = 4
+    # share of the way back to the calibrated horizon taken on each tracked frame
+    tracking_pull: float = 0.2
 
     def __post_init__(self) -> None:
-        _positive(self, "sobel_threshold", "merge_angle_rad", "vp_region_px", "min_confidence")
+        _positive(
+            self,
+            "sobel_threshold",
+            "merge_angle_rad",
+            "vp_region_px",
+            "min_confidence",
+            "max_spread_px",
+        )
+        _check(
+            0 <= self.min_tilt_rad < math.pi / 2, "min_tilt_rad", "in [0, pi/2)", self.min_tilt_rad
+        )
+        _check(self.segment_margin_px >= 0, "segment_margin_px", ">= 0", self.segment_margin_px)
         _check(self.min_cluster_px >= 2, "min_cluster_px", "an integer >= 2", self.min_cluster_px)
         _check(self.lines_kept >= 2, "lines_kept", "an integer >= 2", self.lines_kept)
+        _check(self.row_step_px >= 1, "row_step_px", "an integer >= 1", self.row_step_px)
+        _check(self.rows_above_vp_px >= 0, "rows_above_vp_px", ">= 0", self.rows_above_vp_px)
+        _check(
+            self.tracking_rows_above_vp_px >= self.rows_above_vp_px,
+            "tracking_rows_above_vp_px",
+            f">= rows_above_vp_px={self.rows_above_vp_px}",
+            self.tracking_rows_above_vp_px,
+        )
+        _fraction(self, "tracking_pull")
         _check(
             self.max_tracking_offset_px >= 0,
             "max_tracking_offset_px",
