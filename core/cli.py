@@ -309,6 +309,26 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from core.bench import STAGES, bench_stage, format_json, format_table
+    from core.io.errors import RecordingError
+    from core.params import Params, ParamsError, load_params
+
+    try:
+        params = load_params(args.params) if args.params else Params()
+        timings = {
+            stage: bench_stage(
+                stage, args.recording, params, frames=args.frames, repeat=args.repeat
+            )
+            for stage in args.stage or STAGES
+        }
+    except (ValueError, RecordingError, ParamsError) as err:
+        print(f"fusionscope bench: {err}", file=sys.stderr)
+        return 2
+    print(format_json(timings) if args.format == "json" else format_table(timings))
+    return 0
+
+
 def _cmd_synth(args: argparse.Namespace) -> int:
     from core.io.errors import RecordingError
     from core.synth.generate import generate
@@ -631,6 +651,39 @@ def build_parser() -> argparse.ArgumentParser:
         help="build the index from the files even when a cached one is valid",
     )
     info.set_defaults(func=_cmd_info)
+
+    from core.bench import STAGES
+
+    bench = sub.add_parser(
+        "bench",
+        help="time the stages on one thread against the paper's timing table",
+        description=(
+            "Time each stage on frames of a recording (640x300 processed rows on the "
+            "bundled drives), one thread, median of all runs after warm-up, beside the "
+            "paper's figure (paper 000, Pentium 4 at 3 GHz) and this project's budget."
+        ),
+    )
+    bench.add_argument(
+        "--stage",
+        action="append",
+        choices=STAGES,
+        help="stage to time; repeat for several (default: all)",
+    )
+    bench.add_argument(
+        "--recording",
+        type=Path,
+        default=DEFAULT_RECORDINGS / DEFAULT_RECORDING,
+        help=f"recording whose frames are used (default: the bundled {DEFAULT_RECORDING})",
+    )
+    bench.add_argument("--params", type=Path, help="parameter file (default: the papers')")
+    bench.add_argument(
+        "--frames", type=_int_at_least(2), default=20, help="frames used (default: 20)"
+    )
+    bench.add_argument(
+        "--repeat", type=_int_at_least(1), default=50, help="timed runs per frame (default: 50)"
+    )
+    bench.add_argument("--format", choices=("table", "json"), default="table")
+    bench.set_defaults(func=_cmd_bench)
 
     synth = sub.add_parser("synth", help="generate a synthetic drive with exact ground truth")
     synth.add_argument("--scenario", required=True, choices=sorted(SCENARIOS))
