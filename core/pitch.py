@@ -113,12 +113,6 @@ class Lines:
         """(N,) direction of each line, in (-pi/2, pi/2], 0 for a vertical line."""
         return np.asarray(np.arctan2(-self.abc[:, 1], self.abc[:, 0]), dtype=np.float64)
 
-    def column_at(self, v_px: npt.ArrayLike) -> FloatArray:
-        """(N,) column of each line at row v_px (NaN for a horizontal line)."""
-        a, b, c = self.abc.T
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.asarray(-(b * np.asarray(v_px) + c) / a, dtype=np.float64)
-
     def top(self, count: int) -> Lines:
         """The `count` most confident lines, most confident first."""
         return self.select(np.argsort(-self.confidence, kind="stable")[:count])
@@ -156,24 +150,27 @@ class PitchMemory:
 
 @dataclass(frozen=True, eq=False)
 class PitchResult:
-    """Everything the pitch detector computed for one frame.
+    """Everything the pitch detector computed for one frame (full-image pixels).
 
-    row0_px: first image row whose edges were clustered, row_step_px: every how many rows;
-    edges_positive, edges_negative: (n, W) bool thresholded vertical edges
-    (d/du above the threshold: dark to bright to the right, and below minus it) on rows
-    row0_px + k row_step_px, vehicle boxes removed; labels_positive, labels_negative:
-    (n, W) int32 cluster of each of those edge pixels (0 = none; one numbering for both
-    signs); clusters: those
-    of at least min_cluster_px; fitted: one line per cluster; merged: after eq. (1);
-    chosen: the most confident merged lines; intersections_px: (P, 2) (u, v) of the chosen
-    lines' pairwise intersections, intersection_weight: (P,) the smaller confidence of the
-    pair, intersection_used: (P,) inside the region around calibrated_vp_px (2,);
-    vanishing_point_px: (2,) weighted mean of the used intersections, None when there are
-    none; confidence: the sum of their weights; spread_px: their weighted RMS distance from
-    the vanishing point (inf without one); row_histogram: (h,) edge pixels per row;
-    tracking_shift_px: rows the histogram moved since the previous frame (None without a
-    previous frame); horizon_row_px and pitch_rad: the answer; method: one of METHODS;
-    memory: for the next frame.
+    - row0_px, row_step_px: the edges were clustered on rows row0_px + k row_step_px;
+    - edges_positive, edges_negative: (n, W) bool thresholded vertical edges on those rows
+      (d/du above the threshold: dark to bright to the right; below minus it), vehicle
+      boxes removed;
+    - labels_positive, labels_negative: (n, W) int32 cluster of each of those edge pixels
+      (0 = none; one numbering for both signs);
+    - clusters: those of at least min_cluster_px; fitted: one line per cluster; merged:
+      the slanted fitted lines after eq. (1); chosen: the most confident merged lines;
+    - intersections_px: (P, 2) pairwise intersections of the chosen lines,
+      intersection_weight: (P,) their weights, intersection_used: (P,) inside the region
+      around calibrated_vp_px (2,) and beyond both segments;
+    - vanishing_point_px: (2,) weighted mean of the used intersections (None without
+      any), confidence: the sum of their weights, spread_px: their weighted RMS distance
+      from the vanishing point (inf without one);
+    - window_row0_px, row_histogram: (h,) edge pixels of both signs on each row from
+      window_row0_px down; tracking_shift_px: rows the histogram moved since the previous
+      frame (None without one);
+    - horizon_row_px, pitch_rad: the answer; method: which of METHODS gave it;
+    - memory: what the next frame needs.
     """
 
     row0_px: int
