@@ -253,6 +253,10 @@ def merge_pair(
 
     The result is renormalised to a^2 + b^2 = 1.
     """
+    if not confidence1 + confidence2 > 0:
+        raise ValueError(
+            f"confidence1, confidence2: expected a sum > 0, got {confidence1}, {confidence2}"
+        )
     alpha = confidence2 / (confidence1 + confidence2)
     n1 = math.hypot(abc1[0], abc1[1])
     n2 = math.hypot(abc2[0], abc2[1])
@@ -276,20 +280,23 @@ def merge_lines(lines: Lines, merge_angle_rad: float) -> Lines:
     # Founders as a bit set over the visiting order: the lowest set bit of (close & founders)
     # is the first, most confident founder within the angle.
     founders = 0
-    group = [0] * len(ordered)
-    count = 0
+    founder = [0] * len(ordered)  # of each line, in the visiting order
     for k, row in enumerate(close):
         hit = int.from_bytes(row.tobytes(), "little") & founders
         if hit:
-            group[k] = group[(hit & -hit).bit_length() - 1]
+            founder[k] = founder[(hit & -hit).bit_length() - 1]
         else:
             founders |= 1 << k
-            group[k] = count
-            count += 1
-    member = np.arange(count)[:, None] == np.array(group)[None, :]  # (groups, lines)
+            founder[k] = k
+    heads, group = np.unique(founder, return_inverse=True)
+    member = np.arange(len(heads))[:, None] == group[None, :]  # (groups, lines)
+    # Normals turned to agree with their founder's: near the horizontal, lines within the
+    # angle can have opposite normals, which would cancel in the sum.
+    agree = np.where((ordered.abc[:, :2] * ordered.abc[founder, :2]).sum(axis=1) < 0, -1.0, 1.0)
     confidence = member @ ordered.confidence
-    abc = member @ (ordered.abc * ordered.confidence[:, None])
+    abc = member @ (ordered.abc * (ordered.confidence * agree)[:, None])
     abc /= np.hypot(abc[:, 0], abc[:, 1])[:, None]
+    abc[abc[:, 0] < 0] *= -1.0  # a >= 0, as fitted lines
     rows = np.stack(
         [
             np.where(member, ordered.rows_px[:, 0], np.inf).min(axis=1),
@@ -399,6 +406,15 @@ def _region(
     return vp, camera.horizon_row_px(), row(tracking_rows_above_vp_px), row(rows_above_vp_px), stop
 
 
+def _check_boxes(boxes_px: Sequence[tuple[float, float, float, float]]) -> None:
+    for box in boxes_px:
+        if len(box) != 4 or not all(math.isfinite(c) for c in box):
+            raise ValueError(
+                f"vehicle_boxes_px: expected boxes of 4 finite numbers (u0, v0, u1, v1), "
+                f"got {box!r}"
+            )
+
+
 def _check_image(image: npt.NDArray[np.uint8], camera: CameraModel) -> None:
     i = camera.intrinsics
     if (
@@ -475,6 +491,7 @@ def detect_pitch(
     previous frame, whose edges are left out.
     """
     _check_image(image, camera)
+    _check_boxes(vehicle_boxes_px)
     calibrated_vp, calibrated_horizon, window_row0, row0, stop = _region(
         camera, params.rows_above_vp_px, params.tracking_rows_above_vp_px
     )

@@ -291,12 +291,6 @@ def test_merge_lines_groups_around_the_most_confident_founder() -> None:
     np.testing.assert_allclose(np.sort(merged.confidence), [30.0, 90.0])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="merge_lines compares angles modulo pi but adds the normals without aligning their "
-    "signs: two nearly horizontal lines 0.01 rad apart across +-pi/2 merge into a vertical line",
-)
 def test_merge_lines_across_the_horizontal() -> None:
     p = (100.0, 250.0)
     near_horizontal = _lines(
@@ -652,3 +646,12 @@ def test_udacity_highway_vanishing_point_is_steady_on_the_markings(
     assert abs(rows.mean() - vp[1]) < 3.0
     assert np.ptp(rows) < 12.0
     assert np.all(np.isfinite([r.pitch_rad for r in results]))
+
+
+def test_a_box_with_nan_is_a_clear_error() -> None:
+    cam = camera()
+    blank = np.zeros((480, 640), dtype=np.uint8)
+    with pytest.raises(ValueError, match=r"vehicle_boxes_px: expected boxes of 4 finite numbers"):
+        detect_pitch(blank, cam, PitchParams(), None, [(1.0, 2.0, math.nan, 4.0)])
+    with pytest.raises(ValueError, match="confidence1, confidence2: expected a sum > 0"):
+        merge_pair(np.array([1.0, 0.0, -5.0]), 0.0, np.array([1.0, 0.0, -6.0]), 0.0)
