@@ -281,15 +281,19 @@ def merge_lines(lines: Lines, merge_angle_rad: float) -> Lines:
     # is the first, most confident founder within the angle.
     founders = 0
     founder = [0] * len(ordered)  # of each line, in the visiting order
-    for k, row in enumerate(close):
-        hit = int.from_bytes(row.tobytes(), "little") & founders
+    group = [0] * len(ordered)
+    count = 0
+    packed, width = close.tobytes(), close.shape[1]
+    for k in range(len(ordered)):
+        hit = int.from_bytes(packed[k * width : (k + 1) * width], "little") & founders
         if hit:
-            founder[k] = founder[(hit & -hit).bit_length() - 1]
+            founder[k] = (hit & -hit).bit_length() - 1
+            group[k] = group[founder[k]]
         else:
             founders |= 1 << k
-            founder[k] = k
-    heads, group = np.unique(founder, return_inverse=True)
-    member = np.arange(len(heads))[:, None] == group[None, :]  # (groups, lines)
+            founder[k], group[k] = k, count
+            count += 1
+    member = np.arange(count)[:, None] == np.array(group)[None, :]  # (groups, lines)
     # Normals turned to agree with their founder's: near the horizontal, lines within the
     # angle can have opposite normals, which would cancel in the sum.
     agree = np.where((ordered.abc[:, :2] * ordered.abc[founder, :2]).sum(axis=1) < 0, -1.0, 1.0)
