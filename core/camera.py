@@ -29,6 +29,8 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from core.checks import require_finite
+
 FloatArray = npt.NDArray[np.float64]
 
 # Optical frame axes expressed in the vehicle frame: camera z (optical axis) -> vehicle x,
@@ -58,11 +60,6 @@ def _rot_z(a: float) -> FloatArray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def _finite(name: str, value: float) -> None:
-    if not math.isfinite(value):
-        raise ValueError(f"{name}: expected a finite number, got {value!r}")
-
-
 def _as_points(name: str, pts: npt.ArrayLike, dim: int) -> FloatArray:
     arr = np.asarray(pts, dtype=np.float64)
     if arr.ndim == 1 and arr.shape[0] == dim:
@@ -89,7 +86,7 @@ class Intrinsics:
 
     def __post_init__(self) -> None:
         for name in ("fx_px", "fy_px", "cx_px", "cy_px"):
-            _finite(name, getattr(self, name))
+            require_finite(name, getattr(self, name))
         if self.fx_px <= 0 or self.fy_px <= 0:
             raise ValueError(
                 f"fx_px, fy_px: expected focal lengths > 0, got {self.fx_px}, {self.fy_px}"
@@ -143,7 +140,7 @@ class Extrinsics:
 
     def __post_init__(self) -> None:
         for name in ("height_m", "x_m", "y_m", "pitch_rad", "yaw_rad", "roll_rad"):
-            _finite(name, getattr(self, name))
+            require_finite(name, getattr(self, name))
         if self.height_m <= 0:
             raise ValueError(
                 f"height_m: expected a camera above the road (> 0), got {self.height_m}"
@@ -170,7 +167,7 @@ class BirdEyeGrid:
 
     def __post_init__(self) -> None:
         for name in ("x_min_m", "x_max_m", "y_min_m", "y_max_m", "cell_m"):
-            _finite(name, getattr(self, name))
+            require_finite(name, getattr(self, name))
         if self.cell_m <= 0:
             raise ValueError(f"cell_m: expected > 0, got {self.cell_m}")
         if self.x_max_m <= self.x_min_m:
@@ -242,6 +239,15 @@ class CameraModel:
         if self.rows_used_px is None:
             return 0, self.intrinsics.height_px
         return self.rows_used_px
+
+    def check_image(self, image: object) -> None:
+        """ValueError naming `image` unless it is an (H, W) uint8 grey image of this camera."""
+        i = self.intrinsics
+        expected = f"a ({i.height_px}, {i.width_px}) uint8 grey image (the camera's intrinsics)"
+        if not isinstance(image, np.ndarray):
+            raise ValueError(f"image: expected {expected}, got {type(image).__name__}")
+        if image.dtype != np.uint8 or image.shape != (i.height_px, i.width_px):
+            raise ValueError(f"image: expected {expected}, got {image.dtype} {image.shape}")
 
     # --- pose ---------------------------------------------------------------------------
     def with_pitch(self, pitch_rad: float) -> CameraModel:

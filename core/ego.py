@@ -24,6 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from core.checks import require_finite
+
 NS_PER_S = 1_000_000_000
 
 
@@ -43,18 +45,13 @@ class EgoMotion:
 
     def __post_init__(self) -> None:
         for name in ("dx_m", "dy_m", "dyaw_rad", "dt_s"):
-            _finite(name, getattr(self, name))
+            require_finite(name, getattr(self, name))
         if self.dt_s < 0:
             raise ValueError(f"dt_s: expected an interval >= 0, got {self.dt_s}")
 
     @classmethod
     def still(cls, dt_s: float = 0.0) -> EgoMotion:
         return cls(0.0, 0.0, 0.0, dt_s, 1)
-
-
-def _finite(name: str, value: float) -> None:
-    if not math.isfinite(value):
-        raise ValueError(f"{name}: expected a finite number, got {value!r}")
 
 
 def chord_length_m(speed_mps: float, yaw_rate_radps: float, dt_s: float) -> float:
@@ -68,7 +65,7 @@ def chord_length_m(speed_mps: float, yaw_rate_radps: float, dt_s: float) -> floa
         ("yaw_rate_radps", yaw_rate_radps),
         ("dt_s", dt_s),
     ):
-        _finite(name, value)
+        require_finite(name, value)
     half_turn_rad = yaw_rate_radps * dt_s / 2.0
     return speed_mps * dt_s * float(np.sinc(half_turn_rad / math.pi))
 

@@ -325,15 +325,6 @@ def _is_still(ego: EgoMotion, standstill_speed_mps: float) -> bool:
 
 
 # --- inputs ---------------------------------------------------------------------------------
-def _check_image(image: object, camera: CameraModel) -> None:
-    i = camera.intrinsics
-    expected = f"a ({i.height_px}, {i.width_px}) uint8 grey image (the camera's intrinsics)"
-    if not isinstance(image, np.ndarray):
-        raise ValueError(f"image: expected {expected}, got {type(image).__name__}")
-    if image.dtype != np.uint8 or image.shape != (i.height_px, i.width_px):
-        raise ValueError(f"image: expected {expected}, got {image.dtype} {image.shape}")
-
-
 def _check_ego(ego: object) -> None:
     if ego is None:
         return
@@ -405,7 +396,7 @@ class MotionStereo:
         frame), None when unknown. ValueError naming the argument on a wrong image or a
         non-finite motion.
         """
-        _check_image(image, camera)
+        camera.check_image(image)
         _check_ego(ego)
         p = self.params
         grid = self.grid

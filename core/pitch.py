@@ -419,24 +419,6 @@ def _check_boxes(boxes_px: Sequence[tuple[float, float, float, float]]) -> None:
             )
 
 
-def _check_image(image: npt.NDArray[np.uint8], camera: CameraModel) -> None:
-    i = camera.intrinsics
-    if (
-        not isinstance(image, np.ndarray)
-        or image.dtype != np.uint8
-        or image.shape
-        != (
-            i.height_px,
-            i.width_px,
-        )
-    ):
-        got = f"{image.dtype} {image.shape}" if isinstance(image, np.ndarray) else type(image)
-        raise ValueError(
-            f"image: expected ({i.height_px}, {i.width_px}) uint8 grey as the camera says, "
-            f"got {got}"
-        )
-
-
 @dataclass(frozen=True, eq=False)
 class _Edges:
     """Thresholded signed edges, both signs in one image for labelling.
@@ -494,7 +476,7 @@ def detect_pitch(
     vehicle_boxes_px: (u0, v0, u1, v1) full-image boxes of the vehicles found on the
     previous frame, whose edges are left out.
     """
-    _check_image(image, camera)
+    camera.check_image(image)
     _check_boxes(vehicle_boxes_px)
     calibrated_vp, calibrated_horizon, window_row0, row0, stop = _region(
         camera, params.rows_above_vp_px, params.tracking_rows_above_vp_px

@@ -540,7 +540,7 @@ def test_scenes_without_a_usable_vanishing_point_fall_back(scene: str) -> None:
     ids=["rows", "float", "uint16", "colour", "list"],
 )
 def test_wrong_image_is_a_value_error_naming_it(image: object, came: str) -> None:
-    with pytest.raises(ValueError, match=r"^image: expected \(480, 640\) uint8") as info:
+    with pytest.raises(ValueError, match=r"^image: expected a \(480, 640\) uint8") as info:
         detect_pitch(image, camera(), DEFAULTS)  # type: ignore[arg-type]
     assert came in str(info.value)
 
