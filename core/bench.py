@@ -20,7 +20,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from core.io.drive import Drive
+    from core.camera import CameraModel
+    from core.io.frame import FrameInput
     from core.params import Params
 
 # Paper 000, section III: "640x300 images using standard Pentium 4 at 3.0 GHz"
@@ -61,31 +62,31 @@ def _time_runs(runs: Sequence[Run], warmup: int, repeat: int) -> list[float]:
     return times
 
 
-def _pitch_runs(drive: Drive, frames: Sequence[int], params: Params) -> list[Run]:
+Pair = tuple["FrameInput", "FrameInput"]  # a frame and the one before it
+
+
+def _pitch_runs(camera: CameraModel, pairs: Sequence[Pair], params: Params) -> list[Run]:
     """detect_pitch on each frame, with the previous frame's memory (horizon tracking)."""
     from core.pitch import detect_pitch
 
-    camera = drive.camera
     runs: list[Run] = []
-    for k in frames:
-        image = drive.frame(k).image
-        previous = detect_pitch(drive.frame(k - 1).image, camera, params.pitch).memory
+    for before, now in pairs:
+        previous = detect_pitch(before.image, camera, params.pitch).memory
 
-        def run(image=image, previous=previous) -> Callable[[], object]:
+        def run(image=now.image, previous=previous) -> Callable[[], object]:
             return lambda: detect_pitch(image, camera, params.pitch, previous)
 
         runs.append(run)
     return runs
 
 
-def _motion_stereo_runs(drive: Drive, frames: Sequence[int], params: Params) -> list[Run]:
-    """MotionStereo.update on each frame, its background built from the frame before."""
+def _motion_stereo_runs(camera: CameraModel, pairs: Sequence[Pair], params: Params) -> list[Run]:
+    """MotionStereo.update on each frame, its background built from the frame before (the
+    calibrated pitch throughout: the work does not depend on it)."""
     from core.motion_stereo import MotionStereo
 
-    camera = drive.camera
     runs: list[Run] = []
-    for k in frames:
-        before, now = drive.frame(k - 1), drive.frame(k)
+    for before, now in pairs:
 
         def run(before=before, now=now) -> Callable[[], object]:
             stage = MotionStereo(params.motion_stereo)
@@ -96,45 +97,49 @@ def _motion_stereo_runs(drive: Drive, frames: Sequence[int], params: Params) -> 
     return runs
 
 
-def bench_stage(
-    stage: str,
+def bench_stages(
+    stages: Sequence[str],
     recording: Path | str,
     params: Params | None = None,
     frames: int = 20,
     warmup: int = 5,
     repeat: int = 50,
-) -> StageTiming:
-    """Time `stage` (one of STAGES) on `frames` frames spread over `recording`."""
+) -> dict[str, StageTiming]:
+    """Time each of `stages` (from STAGES) on `frames` frames spread over `recording`."""
     import cv2
     import numpy as np
 
     from core.io.drive import Drive
     from core.params import Params
 
-    if stage not in STAGES:
-        raise ValueError(f"stage: expected one of {', '.join(STAGES)}, got {stage!r}")
+    for stage in stages:
+        if stage not in STAGES:
+            raise ValueError(f"stage: expected one of {', '.join(STAGES)}, got {stage!r}")
     params = params or Params()
     cv2.setNumThreads(1)
     with Drive(recording) as drive:
         if len(drive) < 2:
             raise ValueError(f"{recording}: expected at least 2 frames to bench, got {len(drive)}")
         chosen = sorted({int(k) for k in np.linspace(1, len(drive) - 1, frames)})
-        make = _pitch_runs if stage == "pitch" else _motion_stereo_runs
-        times = _time_runs(make(drive, chosen, params), warmup, repeat)
-        first, stop = drive.camera.row_window_px
-        width = drive.camera.intrinsics.width_px
-    median = float(np.median(times))
-    p90 = float(np.percentile(times, 90))
-    return StageTiming(
-        median_ms=median,
-        p90_ms=p90,
-        paper_ms=PAPER_MS[stage],
-        speedup=PAPER_MS[stage] / median,
-        budget_ms=BUDGET_MS[stage],
-        runs=len(times),
-        frames=len(chosen),
-        image=f"{width}x{stop - first}",
-    )
+        pairs = [(drive.frame(k - 1), drive.frame(k)) for k in chosen]
+        camera = drive.camera
+    first, stop = camera.row_window_px
+    make = {"pitch": _pitch_runs, "motion_stereo": _motion_stereo_runs}
+    timings = {}
+    for stage in stages:
+        times = _time_runs(make[stage](camera, pairs, params), warmup, repeat)
+        median = float(np.median(times))
+        timings[stage] = StageTiming(
+            median_ms=median,
+            p90_ms=float(np.percentile(times, 90)),
+            paper_ms=PAPER_MS[stage],
+            speedup=PAPER_MS[stage] / median,
+            budget_ms=BUDGET_MS[stage],
+            runs=len(times),
+            frames=len(pairs),
+            image=f"{camera.intrinsics.width_px}x{stop - first}",
+        )
+    return timings
 
 
 def format_table(timings: dict[str, StageTiming]) -> str:

@@ -310,18 +310,15 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from core.bench import STAGES, bench_stage, format_json, format_table
+    from core.bench import STAGES, bench_stages, format_json, format_table
     from core.io.errors import RecordingError
     from core.params import Params, ParamsError, load_params
 
     try:
         params = load_params(args.params) if args.params else Params()
-        timings = {
-            stage: bench_stage(
-                stage, args.recording, params, frames=args.frames, repeat=args.repeat
-            )
-            for stage in args.stage or STAGES
-        }
+        timings = bench_stages(
+            args.stage or STAGES, args.recording, params, frames=args.frames, repeat=args.repeat
+        )
     except (ValueError, RecordingError, ParamsError) as err:
         print(f"fusionscope bench: {err}", file=sys.stderr)
         return 2

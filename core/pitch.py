@@ -359,7 +359,7 @@ def histogram_shift(
     histogram: npt.NDArray[np.int64], previous: npt.NDArray[np.int64], max_shift_px: int
 ) -> int:
     """Rows s that best explain histogram[v] = previous[v - s] (content moved down by s),
-    minimising the mean absolute difference over the rows every shift overlaps (all but
+    minimising the sum of absolute differences over the rows every shift overlaps (all but
     max_shift_px at each end); ties go to the smallest |s|."""
     if histogram.shape != previous.shape:
         raise ValueError(
