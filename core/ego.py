@@ -27,6 +27,8 @@ import numpy.typing as npt
 from core.checks import require_finite
 
 NS_PER_S = 1_000_000_000
+# A car whose speed reads below this stands still (wheel-speed sensors read 0 below ~0.1 m/s).
+STANDSTILL_SPEED_MPS = 0.05
 
 
 @dataclass(frozen=True)

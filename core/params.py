@@ -17,6 +17,8 @@ from typing import Any, TypeVar
 
 import yaml
 
+from core.ego import STANDSTILL_SPEED_MPS
+
 PARAMS_FORMAT_VERSION = 1
 
 
@@ -120,8 +122,8 @@ class MotionStereoParams:
     # beyond the paper: D's connected regions smaller than this are not obstacle regions
     min_region_m2: float = 0.1
     # beyond the paper: slower than this over a frame interval the ego car stands still and
-    # motion stereo is background subtraction (as core.io.canlog.STANDSTILL_SPEED_MPS)
-    standstill_speed_mps: float = 0.05
+    # motion stereo is background subtraction
+    standstill_speed_mps: float = STANDSTILL_SPEED_MPS
 
     def __post_init__(self) -> None:
         _positive(self, "x_max_m", "y_half_width_m", "cell_m", "threshold_xi")

@@ -27,6 +27,7 @@ import numpy as np
 import numpy.typing as npt
 from cantools.database.can import Database, Message
 
+from core.ego import STANDSTILL_SPEED_MPS
 from core.io.canfiles import iter_log_frames
 from core.io.canframe import CanFrame
 from core.io.errors import RecordingError
@@ -43,8 +44,6 @@ SPEED_UNITS_TO_MPS = {"m/s": 1.0, "km/h": 1.0 / 3.6, "mph": 0.44704}
 YAW_RATE_UNITS_TO_RADPS = {"rad/s": 1.0, "deg/s": math.pi / 180.0}
 NS_PER_S = 1_000_000_000
 
-# A car whose speed reads below this stands still (wheel-speed sensors read 0 below ~0.1 m/s).
-STANDSTILL_SPEED_MPS = 0.05
 # Standing still for less than this gives too few yaw-rate samples for a bias estimate.
 MIN_STANDSTILL_S = 1.0
 
