@@ -164,12 +164,29 @@ class VehicleParams:
     search_bottom_fraction: float = 0.3
     resampled_width_px: int = 64  # fixed size of the resampled area (paper: "a fixed size")
     max_half_width_px: int = 32  # largest symmetry half-width
-    symmetry_threshold: float = 0.5  # chi over which a width is taken as the vehicle width
+    # |horizontal Sobel| (3x3) above this is a binarised vertical edge (paper: "binarized")
+    edge_threshold: float = 40.0
+    # chi = s^2 / n a vehicle's axis reaches, per row of the resampled area
+    symmetry_threshold: float = 0.35
+    # chi stays below the threshold for windows narrower than this (paper 001: "low for
+    # narrow area widths"): poles, posts and gaps are not vehicles
+    narrow_width_m: float = 0.4
+    # share of a box's columns with a shadow-to-road edge for its bottom (paper: "shadow")
+    bottom_edge_fraction: float = 0.5
+    # share of a box's columns with a horizontal edge for its top
+    top_edge_fraction: float = 0.5
+    min_height_ratio: float = 0.5  # a top lies at least this x width above the bottom
     refined_error_m: float = 0.40  # paper 001, III: "an error lower than 40 centimeters"
     min_width_m: float = 1.2  # world-size filter: narrowest vehicle
     max_width_m: float = 3.0  # world-size filter: widest vehicle
     # box height / width when the top is not found (paper 001, fig. 7.b)
     default_height_ratio: float = 0.8
+    # boxes from several targets overlapping by more than this share of the smaller one are
+    # one vehicle (paper 001: "overlapping results")
+    merge_overlap_fraction: float = 0.5
+    similar_size_ratio: float = 0.8  # narrower / wider width of boxes "of similar size"
+    # bases "at the same height": within this share of the box height
+    same_base_fraction: float = 0.1
 
     def __post_init__(self) -> None:
         _positive(
@@ -179,8 +196,19 @@ class VehicleParams:
             "symmetry_threshold",
             "refined_error_m",
             "default_height_ratio",
+            "edge_threshold",
+            "min_height_ratio",
+            "narrow_width_m",
         )
-        _fraction(self, "search_bottom_fraction")
+        _fraction(
+            self,
+            "search_bottom_fraction",
+            "bottom_edge_fraction",
+            "top_edge_fraction",
+            "merge_overlap_fraction",
+            "similar_size_ratio",
+            "same_base_fraction",
+        )
         _check(
             self.resampled_width_px >= 8,
             "resampled_width_px",
@@ -210,11 +238,29 @@ class GuardRailParams:
     max_holes: int = 5  # paper 002: "a maximum of 5 holes is allowed"
     min_length_fraction: float = 0.5  # paper 002: "longer than 50% of the searching area"
     overlap_fraction: float = 0.5  # paper 002: "overlapped ... more than a threshold"
+    # edge orientations kept: the line's angle from the image horizontal, rising towards the
+    # vanishing point (paper 002 fig. 1 "approximatively" that of a guard rail)
+    min_angle_rad: float = math.radians(2.0)
+    max_angle_rad: float = math.radians(45.0)
+    # overlapping boxes management (paper 002, III); False: every slow area is searched
+    manage_overlaps: bool = True
 
     def __post_init__(self) -> None:
         _positive(self, "max_speed_mps", "sobel_threshold")
         _check(self.max_holes >= 0, "max_holes", "an integer >= 0", self.max_holes)
         _fraction(self, "min_length_fraction", "overlap_fraction")
+        _check(
+            0.0 <= self.min_angle_rad < math.pi / 2,
+            "min_angle_rad",
+            "an angle in [0, pi/2)",
+            self.min_angle_rad,
+        )
+        _check(
+            self.min_angle_rad < self.max_angle_rad < math.pi / 2,
+            "max_angle_rad",
+            f"an angle in (min_angle_rad={self.min_angle_rad}, pi/2)",
+            self.max_angle_rad,
+        )
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,324 @@
+"""Search areas and the radar-guided vehicle detector (papers 001, 000 II-C): known answers."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from roadscenes import RoadRenderer, camera, straight_road
+
+from core.camera import CameraModel, Extrinsics, Intrinsics
+from core.io.frame import RadarTarget
+from core.params import ParamsError, VehicleParams
+from core.search_area import SearchArea, overlap_fraction, search_areas
+from core.synth.scene import Trajectory, Vehicle
+from core.vehicle import (
+    candidate_axes,
+    chi_matrix,
+    detect_vehicles,
+    merge_boxes,
+    mirrored_pairs,
+    signed_vertical_edges,
+    symmetry_matrix,
+    world_size_ok,
+)
+
+PARAMS = VehicleParams()
+RADAR_X_M = 3.6  # the synthetic radar's mount, ahead of the rear axle
+
+
+def flat_camera() -> CameraModel:
+    """640x480, f = 800 px, principal point at the centre, 1.2 m high, looking straight."""
+    return CameraModel(
+        Intrinsics(fx_px=800.0, fy_px=800.0, cx_px=319.5, cy_px=239.5, width_px=640, height_px=480),
+        Extrinsics(height_m=1.2),
+    )
+
+
+def target(x_m: float, y_m: float, range_rate_mps: float = 0.0) -> RadarTarget:
+    """A radar target at (x_m, y_m) in the vehicle frame seen from the synthetic mount."""
+    dx = x_m - RADAR_X_M
+    return RadarTarget.from_polar(
+        math.hypot(dx, y_m), math.atan2(y_m, dx), range_rate_mps, 0.0, RADAR_X_M, 0.0, 0.0
+    )
+
+
+# --- search areas ----------------------------------------------------------------------------
+
+
+def test_search_area_is_where_the_formulas_put_it() -> None:
+    cam = flat_camera()
+    image = np.zeros((480, 640), dtype=np.uint8)
+    t = target(25.0, 1.0)
+    (area,) = search_areas(image, cam, (t,), PARAMS)
+    # straight camera: u = cx - f y / x, v = cy + f h / x
+    f, x = 800.0, 25.0
+    width_px = f * 2.5 / x  # 80 px
+    height_px = width_px / 2  # W / 2
+    v_base = 239.5 + f * 1.2 / x
+    bottom = v_base + 0.3 * height_px  # 30 % of the height below the radar point
+    expected = (319.5 - f * 2.25 / x, bottom - height_px, 319.5 + f * 0.25 / x, bottom)
+    assert area.base_px == pytest.approx((319.5 - f * 1.0 / x, v_base))
+    assert area.full_px == pytest.approx(expected)
+    assert area.box_px == tuple(math.ceil(b) for b in expected)
+    assert not area.cropped
+    # 80 px wide: resampled to 64 px, keeping its aspect ratio
+    assert area.patch.shape == (round(40 * 0.8), 64)
+    assert area.px_per_m == pytest.approx(64 / 2.5)
+    assert (area.y_left_m, area.y_right_m) == pytest.approx((2.25, -0.25))
+
+
+def test_far_areas_are_not_enlarged_and_border_areas_are_cropped() -> None:
+    cam = flat_camera()
+    image = np.zeros((480, 640), dtype=np.uint8)
+    far, border = target(50.0, 0.0), target(12.0, 4.6)
+    areas = search_areas(image, cam, (far, border), PARAMS)
+    assert [a.target_index for a in areas] == [0, 1]
+    c0, r0, c1, r1 = areas[0].box_px
+    assert c1 - c0 == 40 and areas[0].patch.shape == (r1 - r0, c1 - c0)  # 40 px: kept
+    # at 12 m, 4.6 m left: the radar point is at u = 12.8, the area reaches past u = 0
+    a = areas[1]
+    assert a.full_px[0] < 0 and a.box_px[0] == 0 and a.cropped
+    width_px = 800.0 * 2.5 / 12.0
+    assert a.patch.shape[1] == round(a.box_px[2] * 64 / width_px)  # same scale as uncropped
+
+
+def test_targets_outside_the_image_get_no_area() -> None:
+    cam = flat_camera()
+    image = np.zeros((480, 640), dtype=np.uint8)
+    # far to the left, behind the camera, and empty radar
+    outside = (target(10.0, 8.0), target(-5.0, 0.0))
+    assert search_areas(image, cam, outside, PARAMS) == ()
+    assert search_areas(image, cam, (), PARAMS) == ()
+    result = detect_vehicles((), outside, cam, PARAMS)
+    assert [r.verdict for r in result.targets] == ["outside_image"] * 2
+    assert result.vehicles == ()
+
+
+def test_overlap_fraction_is_the_share_of_the_second_area() -> None:
+    def area(box: tuple[int, int, int, int]) -> SearchArea:
+        return SearchArea(
+            0, target(20, 0), (0, 0), box, box, 20, 1, -1, np.zeros((2, 2), np.uint8), 1
+        )
+
+    a, b = area((0, 0, 10, 10)), area((5, 0, 25, 10))
+    assert overlap_fraction(a, b) == pytest.approx(50 / 200)
+    assert overlap_fraction(b, a) == pytest.approx(50 / 100)
+
+
+# --- symmetry ----------------------------------------------------------------------------
+
+
+def test_chi_by_hand_on_a_ten_pixel_row() -> None:
+    # columns:              0  1  2   3  4  5  6  7   8  9
+    edges = np.array([[0, 1, 0, -1, 0, 1, 0, 0, -1, 0]], dtype=np.int8)
+    chi = symmetry_matrix(edges, 4)
+    assert chi.shape == (4, 19)  # axes at every column and between every two: a / 2
+    # axis 2 (a = 4): half-width 1 pairs columns 1 (+) and 3 (-): s = 1, n = 2 (columns 1..3)
+    assert chi[0, 4] == pytest.approx(1 / 2)
+    # half-width 2 adds columns 0 and 4, no edges: s = 1, n = 2
+    assert chi[1, 4] == pytest.approx(1 / 2)
+    # half-width 3 adds column 5 (+) and column -1 (outside): s = 1, n = 3
+    assert chi[2, 4] == pytest.approx(1 / 3)
+    # axis 4 (a = 8): half-width 1 pairs 3 (-) and 5 (+): s = 1, n = 2; half-width 4 pairs
+    # 0 (empty) and 8; n = 4 (columns 1, 3, 5, 8): chi = 1 / 4
+    assert chi[0, 8] == pytest.approx(1 / 2)
+    assert chi[3, 8] == pytest.approx(1 / 4)
+    # axis 4.5 (a = 9), between columns 4 and 5: half-width 4 pairs 1 (+) and 8 (-), the
+    # first pair; the window 1..8 holds 4 edges: chi = 1 / 4
+    assert chi[:3, 9] == pytest.approx([0, 0, 0])
+    assert chi[3, 9] == pytest.approx(1 / 4)
+    # same signs never pair: axis 3 (a = 6) pairs 1 (+) and 5 (+) at half-width 2
+    assert chi[1, 6] == 0.0
+    pairs, n = mirrored_pairs(edges, 4)
+    assert pairs[0, 4] == 1 and n[2, 8] == 3  # axis 4, half-width 3: columns 1..7 hold 3
+
+
+def _box_edges(height: int, width: int, left: int, right: int) -> np.ndarray:
+    """Signed edges of a dark box on a bright background filling columns left..right - 1."""
+    patch = np.full((height, width), 160, dtype=np.uint8)
+    patch[:, left:right] = 60
+    return signed_vertical_edges(patch, PARAMS.edge_threshold)
+
+
+@pytest.mark.parametrize(("left", "right"), [(14, 50), (9, 40), (20, 61)])
+def test_symmetric_box_gives_its_axis_and_width(left: int, right: int) -> None:
+    edges = _box_edges(32, 64, left, right)
+    pairs, n = mirrored_pairs(edges, 32)
+    chi = chi_matrix(pairs, n)
+    axes = candidate_axes(chi, pairs, 0.35 * 32, 3, 10, 32)
+    assert len(axes) == 1
+    axis, _, _, half_px = axes[0]
+    assert abs((axis + 0.5) - (left + right) / 2) <= 1.0  # axis within 1 px
+    assert abs(2 * half_px - (right - left)) <= 2.0  # width within 2 px
+
+
+def test_asymmetric_patterns_give_no_axis() -> None:
+    patch = np.full((32, 64), 160, dtype=np.uint8)
+    patch[:, 30:] = 60  # one step: a single border
+    one = signed_vertical_edges(patch, PARAMS.edge_threshold)
+    stripes = np.zeros((32, 64), dtype=np.int8)
+    stripes[:, 10] = stripes[:, 40] = -1  # two borders of the same sign
+    for edges in (one, stripes, np.zeros((32, 64), dtype=np.int8)):
+        pairs, n = mirrored_pairs(edges, 32)
+        assert candidate_axes(chi_matrix(pairs, n), pairs, 0.35 * 32, 3, 10, 32) == []
+
+
+def test_a_pole_is_bright_at_narrow_widths_and_no_vehicle() -> None:
+    patch = np.full((32, 64), 160, dtype=np.uint8)
+    patch[:, 31:34] = 60  # a 3 px pole: symmetric, but only at narrow widths
+    patch[:, 10:54][-6:] = 90  # and something wide at the bottom
+    edges = signed_vertical_edges(patch, PARAMS.edge_threshold)
+    pairs, n = mirrored_pairs(edges, 32)
+    chi = chi_matrix(pairs, n)
+    assert chi[1, 64] >= 0.35 * 32  # the pole's own axis (32) is bright from the start
+    assert all(a[0] != 32 for a in candidate_axes(chi, pairs, 0.35 * 32, 3, 10, 32))
+
+
+def test_symmetry_matrix_rejects_a_non_image() -> None:
+    with pytest.raises(ValueError, match="edges"):
+        symmetry_matrix(np.zeros(5, dtype=np.int8), 3)
+
+
+# --- a rendered car ----------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def rendered_car() -> tuple[np.ndarray, np.ndarray]:
+    """A 1.8 m wide car 20 m ahead (its rear face), centred 1.0 m left, on the bundled drives'
+    road and camera; the image and its object labels."""
+    length = 4.4
+    keys = [(0.0, 20.0 + length / 2, 1.0), (10.0, 20.0 + length / 2, 1.0)]
+    car = Vehicle(1, "car", length, 1.8, 1.5, 70, Trajectory.from_waypoints(keys))
+    render = RoadRenderer(straight_road(speed_mps=0.0, vehicles=[car]), seed=1)
+    return render(0.0, camera().extrinsics.pitch_rad)
+
+
+def test_rendered_car_is_found_with_its_position_and_width(
+    rendered_car: tuple[np.ndarray, np.ndarray], tmp_path: Path
+) -> None:
+    image, labels = rendered_car
+    cam = camera()
+    cols = np.flatnonzero((labels == 1).any(axis=0))
+    rows = np.flatnonzero((labels == 1).any(axis=1))
+    # the radar point 0.2 m off the car's centre, as radars are (paper 001, fig. 2)
+    radar = (target(20.0, 1.2),)
+    result = detect_vehicles(search_areas(image, cam, radar, PARAMS), radar, cam, PARAMS)
+    (r,) = result.targets
+    assert r.verdict == "vehicle" and r.vehicle_index == 0
+    assert r.symmetry.shape == (PARAMS.max_half_width_px, 2 * r.edges.shape[1] - 1)
+    (v,) = result.vehicles
+    assert v.distance_m == pytest.approx(20.0)  # from the radar
+    assert v.lateral_m == pytest.approx(1.0, abs=0.1)  # from vision
+    assert v.width_m == pytest.approx(1.8, abs=0.1)
+    u0, v0, u1, v1 = v.box_px
+    assert u0 == pytest.approx(cols[0] - 0.5, abs=2) and u1 == pytest.approx(cols[-1] + 0.5, abs=2)
+    assert v1 == pytest.approx(rows[-1] + 0.5, abs=3)  # the base: the shadow ends on the road
+    assert v1 - v0 == pytest.approx(PARAMS.default_height_ratio * (u1 - u0))  # no top found
+    assert v.vision_distance_m == pytest.approx(20.0, abs=1.5)
+    overlay = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+    cv2.rectangle(overlay, (round(u0), round(v0)), (round(u1), round(v1)), (0, 255, 0), 1)
+    cv2.imwrite(str(tmp_path / "rendered_car.png"), overlay)
+
+
+def test_radar_point_beside_the_car_finds_nothing(
+    rendered_car: tuple[np.ndarray, np.ndarray],
+) -> None:
+    image, _ = rendered_car
+    cam = camera()
+    radar = (target(20.0, -2.5),)  # the empty lane to its right
+    result = detect_vehicles(search_areas(image, cam, radar, PARAMS), radar, cam, PARAMS)
+    assert result.targets[0].verdict in ("no_symmetry", "no_bottom")
+    assert result.vehicles == ()
+
+
+def test_guard_rail_targets_are_not_searched(rendered_car: tuple[np.ndarray, np.ndarray]) -> None:
+    image, _ = rendered_car
+    cam = camera()
+    radar = (target(20.0, 1.2),)
+    areas = search_areas(image, cam, radar, PARAMS)
+    result = detect_vehicles(areas, radar, cam, PARAMS, guard_rails=frozenset({0}))
+    assert result.targets[0].verdict == "guard_rail" and result.vehicles == ()
+    assert result.targets[0].edges.shape == (0, 0)
+
+
+def test_two_radar_points_on_one_car_give_one_vehicle(
+    rendered_car: tuple[np.ndarray, np.ndarray],
+) -> None:
+    image, _ = rendered_car
+    cam = camera()
+    radar = (target(20.0, 1.2), target(20.1, 0.85))
+    result = detect_vehicles(search_areas(image, cam, radar, PARAMS), radar, cam, PARAMS)
+    (v,) = result.vehicles
+    assert v.target_indices == (0, 1)
+    assert v.distance_m == pytest.approx(20.05)
+    assert v.width_m == pytest.approx(1.8, abs=0.15)
+    assert [r.vehicle_index for r in result.targets] == [0, 0]
+
+
+def test_detect_vehicles_rejects_areas_of_unknown_targets() -> None:
+    cam = flat_camera()
+    image = np.zeros((480, 640), dtype=np.uint8)
+    areas = search_areas(image, cam, (target(20.0, 0.0),), PARAMS)
+    with pytest.raises(ValueError, match="areas"):
+        detect_vehicles(areas, (), cam, PARAMS)
+
+
+# --- filters and merging -----------------------------------------------------------------
+
+
+def test_world_size_filter_keeps_vehicle_widths_only() -> None:
+    cam = flat_camera()
+    # at 20 m (18.6 m from the camera... here the camera is at x = 0): 40 px per metre
+    per_m = 800.0 / 20.0
+
+    def box(width_m: float) -> tuple[float, float, float, float]:
+        half = width_m * per_m / 2
+        return (319.5 - half, 250.0, 319.5 + half, 287.5)
+
+    assert world_size_ok(box(1.8), 20.0, cam, PARAMS)
+    assert world_size_ok(box(2.9), 20.0, cam, PARAMS)
+    assert not world_size_ok(box(0.6), 20.0, cam, PARAMS)  # a post
+    assert not world_size_ok(box(3.5), 20.0, cam, PARAMS)  # wider than any vehicle
+
+
+def test_merging_prefers_the_largest_box() -> None:
+    big = (100.0, 100.0, 200.0, 180.0)
+    part = (120.0, 140.0, 160.0, 172.0)  # a vehicle part inside it
+    merged = merge_boxes([(part, 3), (big, 1)], PARAMS)
+    assert merged == [(big, [1, 3])]
+
+
+def test_merging_averages_similar_boxes_on_one_base() -> None:
+    a = (100.0, 100.0, 200.0, 180.0)
+    b = (106.0, 102.0, 204.0, 181.0)  # similar size, base 1 px lower (< 10 % of 80 px)
+    ((box, targets),) = merge_boxes([(a, 0), (b, 2)], PARAMS)
+    assert box == pytest.approx((103.0, 101.0, 202.0, 180.5))
+    assert targets == [0, 2]
+
+
+def test_merging_keeps_the_larger_of_similar_boxes_on_different_bases() -> None:
+    a = (100.0, 100.0, 200.0, 180.0)
+    b = (104.0, 112.0, 200.0, 192.0)  # overlapping, base 12 px lower
+    assert merge_boxes([(a, 0), (b, 1)], PARAMS) == [(a, [0, 1])]
+
+
+def test_separate_boxes_stay_separate() -> None:
+    a = (100.0, 100.0, 200.0, 180.0)
+    b = (300.0, 100.0, 380.0, 164.0)
+    assert merge_boxes([(a, 0), (b, 1)], PARAMS) == [(a, [0]), (b, [1])]
+
+
+def test_bad_parameters_name_the_field() -> None:
+    for field, value in (("edge_threshold", 0.0), ("bottom_edge_fraction", 1.5)):
+        with pytest.raises(ParamsError, match=field):
+            dataclasses.replace(PARAMS, **{field: value})
+
+
+def test_search_areas_reject_a_bad_image() -> None:
+    with pytest.raises(ValueError, match="image"):
+        search_areas(np.zeros((10, 10), dtype=np.float32), flat_camera(), (), PARAMS)
