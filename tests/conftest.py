@@ -52,3 +52,49 @@ def realdata() -> Path:
 def _index_cache_in_a_temporary_folder(tmp_path_factory: pytest.TempPathFactory) -> None:
     """Drive caches recording indexes; tests keep them out of the user's cache folder."""
     os.environ["FUSIONSCOPE_CACHE_DIR"] = str(tmp_path_factory.mktemp("fusionscope-cache"))
+
+
+# The RAV4's camera pose is not in the data set. It was estimated from the image: the two
+# dashed lane lines of the ego lane meet at (597, 390.5) px in the 1164x874 frame. The horizon
+# lies 46.5 px above cy = 437 px, so with fx = 910 px the camera looks down by
+# atan(46.5 / 910) = 0.051 rad; the straight-ahead point lies 15 px right of cx = 582 px, a
+# yaw of atan(15 / 910) = 0.0165 rad to the left (core.camera's convention). At 1.2 m height
+# the ego lane then measures 3.5 m wide 9.8 m ahead, as a lane should.
+RAV4_PITCH_RAD = 0.051
+RAV4_YAW_RAD = 0.0165
+
+
+@pytest.fixture(scope="session")
+def rav4(realdata: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The RAV4's first frame imported with its CAN log (speed, yaw rate, radar tracks)."""
+    from core.cli import main
+
+    rav4 = realdata / "comma2k19-rav4"
+    mapping = tmp_path_factory.mktemp("mapping") / "rav4.yaml"
+    mapping.write_text(
+        """
+can:
+  channel: can0
+  speed: {message: SPEED, signal: SPEED, unit: km/h}
+  yaw_rate: {message: KINEMATICS, signal: YAW_RATE, unit: deg/s}
+radar:
+  can:
+    channel: can1
+    messages: TRACK_A_*
+    distance: {signal: LONG_DIST, unit: m}
+    lateral: {signal: LAT_DIST, unit: m, sign: -1}
+    range_rate: {signal: REL_SPEED, unit: m/s}
+    valid: {signal: VALID}
+"""
+    )
+    out = tmp_path_factory.mktemp("rav4") / "rav4"
+    args = ["import", "still", str(rav4 / "first_frame.png"), str(out), "--time-s", "46408.547"]
+    args += ["--can", str(rav4 / "rav4_seg40.log.gz"), "--mapping", str(mapping)]
+    args += ["--dbc", str(rav4 / "toyota_rav4_powertrain.dbc")]
+    args += ["--dbc", str(rav4 / "toyota_adas_radar.dbc")]
+    args += ["--fx", "910", "--cx", "582", "--cy", "437", "--camera-height-m", "1.2"]
+    args += ["--pitch-rad", str(RAV4_PITCH_RAD), "--yaw-rad", str(RAV4_YAW_RAD)]
+    args += ["--radar-x-m", "2.7"]
+    args += ["--max-radar-skew-ms", "50"]
+    assert main(args) == 0
+    return out

@@ -1,11 +1,7 @@
 """The real RAV4: its still frame and CAN log imported, its radar tracks on the cars they saw.
 
-The camera's pose is not in the data set. It was estimated from the image: the two dashed
-lane lines of the ego lane meet at (597, 390.5) px in the 1164x874 frame. The horizon lies
-46.5 px above cy = 437 px, so with fx = 910 px the camera looks down by atan(46.5 / 910) =
-0.051 rad; the straight-ahead point lies 15 px right of cx = 582 px, a yaw of atan(15 / 910) =
-0.0165 rad to the left (core.camera's convention). At 1.2 m height the ego lane then measures
-3.5 m wide 9.8 m ahead, as a lane should. The boxes below were measured on the frame.
+The import is the `rav4` fixture of tests/conftest.py, which says how the camera's pose was
+estimated. The boxes below were measured on the frame.
 """
 
 from __future__ import annotations
@@ -17,47 +13,12 @@ import numpy as np
 import pytest
 
 from app.draw import draw_radar, grey_to_rgb
-from core.cli import main
 from core.io import Drive
 
 SOURCE_SIZE_PX = (1164, 874)
 # Pixel-edge boxes (left, top, right, bottom) on the 1164x874 frame.
 SILVER_CAR_AHEAD_PX = (565, 380, 624, 432)
 WHITE_SUV_RIGHT_PX = (695, 355, 830, 452)
-PITCH_RAD = 0.051
-YAW_RAD = 0.0165
-
-
-@pytest.fixture(scope="module")
-def rav4(realdata: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
-    rav4 = realdata / "comma2k19-rav4"
-    mapping = tmp_path_factory.mktemp("mapping") / "rav4.yaml"
-    mapping.write_text(
-        """
-can:
-  channel: can0
-  speed: {message: SPEED, signal: SPEED, unit: km/h}
-  yaw_rate: {message: KINEMATICS, signal: YAW_RATE, unit: deg/s}
-radar:
-  can:
-    channel: can1
-    messages: TRACK_A_*
-    distance: {signal: LONG_DIST, unit: m}
-    lateral: {signal: LAT_DIST, unit: m, sign: -1}
-    range_rate: {signal: REL_SPEED, unit: m/s}
-    valid: {signal: VALID}
-"""
-    )
-    out = tmp_path_factory.mktemp("rav4") / "rav4"
-    args = ["import", "still", str(rav4 / "first_frame.png"), str(out), "--time-s", "46408.547"]
-    args += ["--can", str(rav4 / "rav4_seg40.log.gz"), "--mapping", str(mapping)]
-    args += ["--dbc", str(rav4 / "toyota_rav4_powertrain.dbc")]
-    args += ["--dbc", str(rav4 / "toyota_adas_radar.dbc")]
-    args += ["--fx", "910", "--cx", "582", "--cy", "437", "--camera-height-m", "1.2"]
-    args += ["--pitch-rad", str(PITCH_RAD), "--yaw-rad", str(YAW_RAD), "--radar-x-m", "2.7"]
-    args += ["--max-radar-skew-ms", "50"]
-    assert main(args) == 0
-    return out
 
 
 def scaled(box: tuple[int, int, int, int], width_px: int, height_px: int) -> np.ndarray:

@@ -1,0 +1,472 @@
+"""Guard-rail filter for slow radar targets: an uninterrupted oblique line across the target's
+search area (paper 002, sections II and III).
+
+Only slow targets are checked: real speed |range rate + ego speed cos(azimuth)| below
+`max_speed_mps` (paper 002, II). A target left of the car (y_m > 0) is checked for a left
+guard rail, the others for a right one. Steps, each visible in `GuardRailCheck`:
+
+1. edges: 3x3 Sobel derivatives of the area's patch; an edge pixel has a gradient module
+   above `sobel_threshold` and the orientation of a guard rail on that side (fig. 1): its
+   line rises towards the vanishing point (to the right for a left rail, to the left for a
+   right one) at `min_angle_rad` .. `max_angle_rad` from the image horizontal;
+2. morphology (fig. 2): erosion by a 1x3 horizontal line, which keeps horizontal runs and
+   erases isolated points and vertical segments, then dilation by a cross 3 rows high and 5
+   columns wide, which reinforces both directions, the horizontal more;
+3. start (fig. 3, 4): the first white pixel of the 3x5 neighbourhood of fig. 3, in its
+   priority order, anchored at the near end of the area (column 0 for a left rail) at
+   mid-height and moved 3 rows down at a time to the bottom (area A of fig. 4);
+4. line following (fig. 5, 6): from the start, the next pixel is the first white unvisited
+   one of right, up-right, down-right, up, down (left rail); when none is white the line
+   continues one column right on the same row and counts a hole; it ends when more than
+   `max_holes` holes are met or at the far border of the area;
+5. verdict: the line's horizontal extent (from the start column to the last column reached
+   on an edge pixel) over the patch width is its coverage; more than
+   `min_length_fraction` is a guard rail;
+6. overlapping boxes management (III): the slow targets' areas are processed nearest first
+   (by x_m); after a guard rail, each following area that the last labelled one covers by
+   more than `overlap_fraction` (`core.search_area.overlap_fraction`) is labelled guard rail
+   without a search, until the first that is not covered enough, where the search resumes.
+   `manage_overlaps` False searches every slow area.
+
+A right rail is the mirror image of a left one: its patch is flipped left-right, steps 1-5
+run as for a left rail, and the edges, start, line and holes are flipped back. `rail_edges`
+(steps 1-2), `find_start` (3), `follow_line` (4-5) and `search_line` (3-5) can be called on
+their own; the last three work on the left-rail orientation.
+
+Coordinates: patch pixels (row, col), as `SearchArea.patch`; `SearchArea.to_image_px` maps
+them into the image.
+
+Notes:
+    - Real speed: the azimuth is taken as the bearing of the line of sight in the vehicle
+      frame (radar mounted facing forward, yaw rate neglected), as in the paper. With the
+      ego speed unknown (NaN) no target is known to be slow and nothing is checked.
+    - Step 1: "module" is the Euclidean norm of the two Sobel derivatives (4 per grey level
+      of a step edge), computed with a replicated border (OpenCV's default reflection
+      zeroes d/dcol on the first and last column, where the start is searched). Its
+      threshold defaults to 40, a 10-grey step, rather than the lowest that works (the
+      comment of `GuardRailParams.sobel_threshold` gives the measurement). The paper
+      shows the kept orientations only as a drawing (fig. 1); here a window of line angles
+      (2 .. 45 deg by default). Rail edges in the bundled drives' areas lie at about 3 to
+      15 deg. Horizontal edges are left out, as the paper's misses of quasi-horizontal rails
+      (fig. 11) suggest: they are mostly vehicles' bumpers, roofs and shadows, and with the
+      window from 0 deg 37 of 107 vehicle targets of the bundled highway drive (speed gate
+      off) were labelled guard rail, from 2 deg 3.
+    - Step 2: our copy of fig. 2 runs its two tables together (rows of 8 numbers); read as
+      3 + 5 columns they are a 3x3 element whose middle row alone is set, i.e. the 1x3
+      horizontal line used here for erosion, and a 3x5 cross (middle row of 5, middle
+      column of 3) used for dilation. OpenCV's border handling leaves the patch border
+      uneroded.
+    - Step 3: fig. 3 read as offsets from the anchor '.', which has no priority and is
+      not itself tested: 1 (0, +1), 2 (-1, +1), 3 (+1, +1), 4 (-1, 0), 5 (+1, 0),
+      6-8 (-1, +2..+4), 9-11 (0, +2..+4), 12-14 (+1, +2..+4) as (row, col). The anchor
+      starts on row h // 2, so the row above mid-height is searched too, and moves 3 rows
+      at a time (the neighbourhood's height: every row is searched once) while it is inside
+      the patch; cells outside the patch are black. Area A is thus the first 5 columns from
+      row h // 2 - 1 down.
+    - Step 4: a hole is the position stepped over (one column right of the last position,
+      same row); the hole that exceeds `max_holes` ends the search and is recorded too, so
+      `holes_px` holds up to max_holes + 1 positions. Pixels are never revisited (the line
+      only moves right or vertically, so only up and down moves could revisit).
+    - Step 5: "longer than 50% of the searching area" is read as the horizontal extent, in
+      columns, over the patch width (a guard rail crosses the area from side to side).
+    - Step 6: the paper compares "the following area" with the labelled one; here each area
+      of a chain is compared with the last one labelled, so a chain can follow a rail
+      beyond the first area, as the rows of boxes along a rail in fig. 8. `overlapped_by`
+      names that last labelled area. Areas at equal distance keep their radar order.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+
+from core.io.frame import RadarTarget
+from core.params import GuardRailParams
+from core.search_area import SearchArea, overlap_fraction
+
+SIDES = ("left", "right")
+VERDICTS = ("guard_rail", "not_guard_rail", "overlap")
+
+# Fig. 2, as read in the module Notes: (a) erosion, (b) dilation.
+EROSION_KERNEL = np.ones((1, 3), dtype=np.uint8)
+DILATION_KERNEL = np.array(
+    [[0, 0, 1, 0, 0], [1, 1, 1, 1, 1], [0, 0, 1, 0, 0]],
+    dtype=np.uint8,
+)
+# Fig. 3: (row, col) offsets from the anchor, priority 1 first (left rail).
+START_OFFSETS = (
+    (0, 1),
+    (-1, 1),
+    (1, 1),
+    (-1, 0),
+    (1, 0),
+    (-1, 2),
+    (-1, 3),
+    (-1, 4),
+    (0, 2),
+    (0, 3),
+    (0, 4),
+    (1, 2),
+    (1, 3),
+    (1, 4),
+)
+# Paper 002: the neighbourhood moves "by three pixels down at a time" (its own height).
+START_STEP_PX = 3
+# Fig. 5: right, up-right, down-right, up, down (left rail); the order of `_follow`'s tests.
+FOLLOW_OFFSETS = ((0, 1), (-1, 1), (1, 1), (-1, 0), (1, 0))
+WHITE = 255
+
+# The edge image is searched as flat bytes padded with black: one row above and below, and
+# on the right as many columns as fig. 3 reaches, so no neighbour test needs a bounds check.
+_PAD_RIGHT_PX = max(dc for _, dc in START_OFFSETS)
+
+EdgeImage = npt.NDArray[np.uint8]
+PixelArray = npt.NDArray[np.int32]
+
+
+@dataclass(frozen=True, eq=False)
+class LineTrace:
+    """Steps 3-5 on a left-rail edge image of width w.
+
+    line_px: (N, 2) int32 (row, col) of the followed edge pixels, the start first ((0, 2)
+    when no start was found); holes_px: (M, 2) int32 positions stepped over as holes, in
+    order; coverage: (last column of line_px - start column + 1) / w, 0..1; guard_rail:
+    coverage > min_length_fraction.
+    """
+
+    line_px: PixelArray
+    holes_px: PixelArray
+    coverage: float
+    guard_rail: bool
+
+    @property
+    def start_px(self) -> tuple[int, int] | None:
+        """(row, col) of the start pixel, None when there is none."""
+        if len(self.line_px) == 0:
+            return None
+        return int(self.line_px[0, 0]), int(self.line_px[0, 1])
+
+
+@dataclass(frozen=True, eq=False)
+class GuardRailCheck:
+    """What the filter did with one slow target's area (patch coordinates).
+
+    target_index: the target's index in the frame's radar tuple; side: 'left' or 'right'
+    rail looked for; real_speed_mps: its speed over ground; edges: (h, w) uint8 0/255
+    after morphology (steps 1-2; zeros((0, 0)) when not searched); start_px: (row, col) of
+    the first white pixel (None when none was found or not searched); line_px: (N, 2) int32
+    (row, col) followed points; holes_px: (M, 2) int32 positions stepped over as holes;
+    coverage: 0..1 (0 when not searched); verdict: one of VERDICTS, 'overlap' when labelled
+    guard rail by overlap without a search; overlapped_by: target_index of the area whose
+    guard rail labelled this one (None unless 'overlap').
+    """
+
+    target_index: int
+    side: str
+    real_speed_mps: float
+    edges: EdgeImage
+    start_px: tuple[int, int] | None
+    line_px: PixelArray
+    holes_px: PixelArray
+    coverage: float
+    verdict: str
+    overlapped_by: int | None
+
+    @property
+    def guard_rail(self) -> bool:
+        """Labelled guard rail, by a search or by overlap."""
+        return self.verdict != "not_guard_rail"
+
+
+@dataclass(frozen=True, eq=False)
+class GuardRailResult:
+    """checks: one per slow target, in the order processed (nearest first)."""
+
+    checks: tuple[GuardRailCheck, ...]
+
+    @property
+    def guard_rail_targets(self) -> frozenset[int]:
+        """Target indices labelled guard rail (searched or by overlap)."""
+        return frozenset(c.target_index for c in self.checks if c.guard_rail)
+
+    @property
+    def searched(self) -> int:
+        """Number of areas the line search ran on."""
+        return sum(c.verdict != "overlap" for c in self.checks)
+
+
+def real_speed_mps(target: RadarTarget, ego_speed_mps: float) -> float:
+    """Speed over ground along the line of sight (m/s, positive receding): the range rate
+    plus the ego speed's component along the line of sight, so a static object reads 0.
+
+    NaN when ego_speed_mps is NaN (unknown): such a target is never slow.
+    """
+    return target.range_rate_mps + ego_speed_mps * math.cos(target.azimuth_rad)
+
+
+# --- steps 1-2: edges -------------------------------------------------------------------------
+
+
+def _check_image(name: str, image: object) -> None:
+    if not isinstance(image, np.ndarray) or image.dtype != np.uint8 or image.ndim != 2:
+        got = (
+            f"{image.dtype} {image.shape}"
+            if isinstance(image, np.ndarray)
+            else type(image).__name__
+        )
+        raise ValueError(f"{name}: expected an (h, w) uint8 grey image, got {got}")
+
+
+def _mirror(image: npt.NDArray[np.uint8]) -> npt.NDArray[np.uint8]:
+    """The image flipped left-right (a right rail seen as a left one, and back)."""
+    return np.asarray(cv2.flip(image, 1), dtype=np.uint8)
+
+
+def _left_edges(patch: npt.NDArray[np.uint8], params: GuardRailParams) -> EdgeImage:
+    """Steps 1-2 for a left rail: (h, w) uint8 0/255."""
+    # Replicated border: the default reflection zeroes d/dcol on the first and last column.
+    gx = cv2.Sobel(patch, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    gy = cv2.Sobel(patch, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    # A line rising to the right at angle a from the horizontal has its gradient along
+    # +-(sin a, cos a) in (col, row): same signs, |gx| / |gy| = tan a.
+    ax, ay = np.abs(gx), np.abs(gy)
+    keep = (gx * gy >= 0) & (ax >= math.tan(params.min_angle_rad) * ay)
+    keep &= ax <= math.tan(params.max_angle_rad) * ay
+    keep &= gx * gx + gy * gy > params.sobel_threshold**2
+    binary = keep.view(np.uint8) * np.uint8(WHITE)
+    eroded = cv2.erode(binary, EROSION_KERNEL)
+    return np.asarray(cv2.dilate(eroded, DILATION_KERNEL), dtype=np.uint8)
+
+
+def rail_edges(patch: npt.NDArray[np.uint8], side: str, params: GuardRailParams) -> EdgeImage:
+    """Steps 1-2: (h, w) uint8 0/255 edges of a `side` ('left' or 'right') guard rail in the
+    (h, w) uint8 grey patch, after erosion and dilation (patch coordinates)."""
+    _check_image("patch", patch)
+    if side not in SIDES:
+        raise ValueError(f"side: expected one of {SIDES}, got {side!r}")
+    if side == "left":
+        return _left_edges(patch, params)
+    return _mirror(_left_edges(_mirror(patch), params))
+
+
+# --- steps 3-5: start, line following, verdict ------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class _Padded:
+    """An edge image as flat bytes with black padding (see _PAD_RIGHT_PX): pixel (r, c) at
+    (r + 1) * stride + c."""
+
+    data: bytearray
+    stride: int
+    h: int
+    w: int
+
+    @classmethod
+    def of(cls, edges: EdgeImage) -> _Padded:
+        h, w = edges.shape
+        padded = cv2.copyMakeBorder(edges, 1, 1, 0, _PAD_RIGHT_PX, cv2.BORDER_CONSTANT, value=0)
+        return cls(bytearray(padded.tobytes()), w + _PAD_RIGHT_PX, h, w)
+
+    def pixels(self, flat: list[int]) -> PixelArray:
+        """(N, 2) int32 (row, col) of flat indices."""
+        rows, cols = np.divmod(np.array(flat, dtype=np.int32).reshape(-1), self.stride)
+        return np.stack([rows - 1, cols], axis=1).astype(np.int32)
+
+
+def _find_start(p: _Padded) -> int | None:
+    """Step 3 on padded edges: flat index of the start pixel, or None."""
+    s = p.stride
+    offsets = [dr * s + dc for dr, dc in START_OFFSETS]
+    data = p.data
+    for row in range(p.h // 2, p.h, START_STEP_PX):
+        anchor = (row + 1) * s
+        for off in offsets:
+            if data[anchor + off]:
+                return anchor + off
+    return None
+
+
+def _follow(p: _Padded, start: int, max_holes: int) -> tuple[list[int], list[int]]:
+    """Step 4 on padded edges from the flat index `start`: the followed and the hole
+    indices. Visited pixels are blackened in p.data."""
+    data, s = p.data, p.stride
+    right, up_right, down_right, up, down = (dr * s + dc for dr, dc in FOLLOW_OFFSETS)
+    col = start % s
+    last_col = p.w - 1
+    i = start
+    data[i] = 0
+    line = [i]
+    holes: list[int] = []
+    while col < last_col:
+        # fig. 5, in FOLLOW_OFFSETS order
+        if data[i + right]:
+            i += right
+            col += 1
+        elif data[i + up_right]:
+            i += up_right
+            col += 1
+        elif data[i + down_right]:
+            i += down_right
+            col += 1
+        elif data[i + up]:
+            i += up
+        elif data[i + down]:
+            i += down
+        else:  # a hole: on along the row
+            i += right
+            col += 1
+            holes.append(i)
+            if len(holes) > max_holes:
+                break
+            continue
+        data[i] = 0
+        line.append(i)
+    return line, holes
+
+
+_NO_PIXELS = np.zeros((0, 2), dtype=np.int32)
+_NO_PIXELS.flags.writeable = False
+
+
+def _trace(p: _Padded, start: int | None, params: GuardRailParams) -> LineTrace:
+    """Steps 4-5 from the flat index `start` (None: no start, an empty trace)."""
+    if start is None:
+        return LineTrace(_NO_PIXELS, _NO_PIXELS, 0.0, False)
+    line, holes = _follow(p, start, params.max_holes)
+    line_px = p.pixels(line)
+    coverage = (int(line_px[:, 1].max()) - int(line_px[0, 1]) + 1) / p.w
+    return LineTrace(line_px, p.pixels(holes), coverage, coverage > params.min_length_fraction)
+
+
+def find_start(edges: EdgeImage) -> tuple[int, int] | None:
+    """Step 3 on a left-rail edge image (h, w) uint8 (white: > 0): (row, col) of the first
+    white pixel of fig. 3's neighbourhood anchored at column 0, from row h // 2 down in
+    steps of 3 rows; None when area A holds none."""
+    _check_image("edges", edges)
+    p = _Padded.of(edges)
+    start = _find_start(p)
+    return None if start is None else (start // p.stride - 1, start % p.stride)
+
+
+def follow_line(edges: EdgeImage, start: tuple[int, int], params: GuardRailParams) -> LineTrace:
+    """Steps 4-5 on a left-rail edge image (h, w) uint8 (white: > 0) from its white pixel
+    `start` (row, col), with `params.max_holes` and `params.min_length_fraction`."""
+    _check_image("edges", edges)
+    h, w = edges.shape
+    r, c = start
+    if not (0 <= r < h and 0 <= c < w) or not edges[r, c]:
+        raise ValueError(f"start: expected a white pixel (row, col) of the edges, got {start}")
+    p = _Padded.of(edges)
+    return _trace(p, (r + 1) * p.stride + c, params)
+
+
+def search_line(edges: EdgeImage, params: GuardRailParams) -> LineTrace:
+    """Steps 3-5 on a left-rail edge image (h, w) uint8 (white: > 0): `follow_line` from
+    `find_start`'s pixel; an empty trace, not a guard rail, when there is none."""
+    _check_image("edges", edges)
+    p = _Padded.of(edges)
+    return _trace(p, _find_start(p), params)
+
+
+# --- the stage --------------------------------------------------------------------------------
+
+_NOT_SEARCHED = np.zeros((0, 0), dtype=np.uint8)
+_NOT_SEARCHED.flags.writeable = False
+
+
+def _side(target: RadarTarget) -> str:
+    return "left" if target.y_m > 0 else "right"
+
+
+def _search(area: SearchArea, speed_mps: float, params: GuardRailParams) -> GuardRailCheck:
+    """Steps 1-5 on one area; a right rail's patch is mirrored and the results mapped back."""
+    side = _side(area.target)
+    left = side == "left"
+    edges = _left_edges(area.patch if left else _mirror(area.patch), params)
+    p = _Padded.of(edges)
+    trace = _trace(p, _find_start(p), params)
+    line_px, holes_px = trace.line_px, trace.holes_px
+    if not left:
+        edges = _mirror(edges)
+        line_px, holes_px = line_px.copy(), holes_px.copy()
+        line_px[:, 1] = p.w - 1 - line_px[:, 1]
+        holes_px[:, 1] = p.w - 1 - holes_px[:, 1]
+    return GuardRailCheck(
+        target_index=area.target_index,
+        side=side,
+        real_speed_mps=speed_mps,
+        edges=edges,
+        start_px=None if len(line_px) == 0 else (int(line_px[0, 0]), int(line_px[0, 1])),
+        line_px=line_px,
+        holes_px=holes_px,
+        coverage=trace.coverage,
+        verdict="guard_rail" if trace.guard_rail else "not_guard_rail",
+        overlapped_by=None,
+    )
+
+
+def _check_areas(areas: tuple[SearchArea, ...]) -> None:
+    for k, area in enumerate(areas):
+        if not isinstance(area, SearchArea):
+            raise ValueError(f"areas[{k}]: expected a SearchArea, got {type(area).__name__}")
+        _check_image(f"areas[{k}].patch", area.patch)
+
+
+def detect_guard_rails(
+    areas: tuple[SearchArea, ...], ego_speed_mps: float, params: GuardRailParams
+) -> GuardRailResult:
+    """Paper 002: which slow radar targets are guard rails.
+
+    areas: the search areas of one frame (`core.search_area.search_areas`), any order;
+    ego_speed_mps: the car's speed (NaN when unknown: no target is known to be slow, and
+    the result is empty). Returns one check per slow target, nearest first.
+    """
+    _check_areas(areas)
+    if not (math.isfinite(ego_speed_mps) or math.isnan(ego_speed_mps)):
+        raise ValueError(
+            f"ego_speed_mps: expected a finite speed or NaN (unknown), got {ego_speed_mps}"
+        )
+    if math.isnan(ego_speed_mps):
+        return GuardRailResult(())
+    slow = []
+    for area in areas:
+        speed = real_speed_mps(area.target, ego_speed_mps)
+        if abs(speed) < params.max_speed_mps:
+            slow.append((area, speed))
+    slow.sort(key=lambda item: item[0].x_m)  # stable: equal distances keep radar order
+
+    checks: list[GuardRailCheck] = []
+    k = 0
+    while k < len(slow):
+        area, speed = slow[k]
+        check = _search(area, speed, params)
+        checks.append(check)
+        k += 1
+        if check.verdict != "guard_rail" or not params.manage_overlaps:
+            continue
+        # 6. the following areas covered by the last labelled one are guard rail too
+        last = area
+        while k < len(slow) and overlap_fraction(last, slow[k][0]) > params.overlap_fraction:
+            following, speed = slow[k]
+            checks.append(
+                GuardRailCheck(
+                    target_index=following.target_index,
+                    side=_side(following.target),
+                    real_speed_mps=speed,
+                    edges=_NOT_SEARCHED,
+                    start_px=None,
+                    line_px=_NO_PIXELS,
+                    holes_px=_NO_PIXELS,
+                    coverage=0.0,
+                    verdict="overlap",
+                    overlapped_by=last.target_index,
+                )
+            )
+            last = following
+            k += 1
+    return GuardRailResult(tuple(checks))
