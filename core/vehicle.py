@@ -366,7 +366,7 @@ class _AreaSearch:
         return None if self.chosen is None else self.candidates[self.chosen].box_px
 
 
-def search(areas: list[SearchArea], params: VehicleParams) -> list[_AreaSearch]:
+def _search(areas: list[SearchArea], params: VehicleParams) -> list[_AreaSearch]:
     """Steps 4-8 on each of `areas`; steps 5-6 on all of them at once (padded to one size)."""
     if not areas:
         return []
@@ -526,7 +526,7 @@ def detect_vehicles(
             f"got target indices {sorted(a.target_index for a in areas)}"
         )
     searched = [a for a in areas if a.target_index not in guard_rails]
-    found = dict(zip((a.target_index for a in searched), search(searched, params), strict=True))
+    found = dict(zip((a.target_index for a in searched), _search(searched, params), strict=True))
     chosen = {i: box for i, f in found.items() if (box := f.box_px) is not None}
     ids = list(chosen)
     _, widths_m, _ = world_extents([chosen[i] for i in ids], [radar[i].x_m for i in ids], camera)
