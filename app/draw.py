@@ -17,6 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from core.camera import CameraModel
+from core.checks import require_grey_image
 from core.io.frame import RadarTarget
 from core.io.groundtruth import FrameTruth
 
@@ -51,10 +52,7 @@ TEXT_MARGIN_PX = 6
 
 def grey_to_rgb(image: GreyImage) -> RgbImage:
     """(H, W) uint8 grey -> (H, W, 3) uint8 RGB with equal channels."""
-    if image.dtype != np.uint8 or image.ndim != 2:
-        raise ValueError(
-            f"image: expected an (H, W) uint8 grey image, got {image.dtype} {image.shape}"
-        )
+    require_grey_image("image", image)
     return np.repeat(image[:, :, None], 3, axis=2)
 
 

@@ -44,6 +44,7 @@ import numpy as np
 import numpy.typing as npt
 
 from core.camera import Intrinsics
+from core.checks import require_grey_image
 
 FloatArray = npt.NDArray[np.float64]
 GreyImage = npt.NDArray[np.uint8]
@@ -213,10 +214,7 @@ def calibrate_chessboard(
     ValueError when fewer than MIN_VIEWS views are usable; the message lists the skipped ones.
     """
     for name, img in images:
-        if img.dtype != np.uint8 or img.ndim != 2:
-            raise ValueError(
-                f"{name}: expected an (H, W) uint8 grey image, got {img.dtype} {img.shape}"
-            )
+        require_grey_image(name, img)
     if not images:
         raise ValueError(f"views: expected at least {MIN_VIEWS} chessboard images, got none")
     width, height = _reference_size(images)

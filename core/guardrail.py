@@ -84,6 +84,7 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from core.checks import require_grey_image
 from core.io.frame import RadarTarget
 from core.params import GuardRailParams
 from core.search_area import SearchArea, overlap_fraction
@@ -211,16 +212,6 @@ def real_speed_mps(target: RadarTarget, ego_speed_mps: float) -> float:
 # --- steps 1-2: edges -------------------------------------------------------------------------
 
 
-def _check_image(name: str, image: object) -> None:
-    if not isinstance(image, np.ndarray) or image.dtype != np.uint8 or image.ndim != 2:
-        got = (
-            f"{image.dtype} {image.shape}"
-            if isinstance(image, np.ndarray)
-            else type(image).__name__
-        )
-        raise ValueError(f"{name}: expected an (h, w) uint8 grey image, got {got}")
-
-
 def _mirror(image: npt.NDArray[np.uint8]) -> npt.NDArray[np.uint8]:
     """The image flipped left-right (a right rail seen as a left one, and back)."""
     return np.asarray(cv2.flip(image, 1), dtype=np.uint8)
@@ -245,7 +236,7 @@ def _left_edges(patch: npt.NDArray[np.uint8], params: GuardRailParams) -> EdgeIm
 def rail_edges(patch: npt.NDArray[np.uint8], side: str, params: GuardRailParams) -> EdgeImage:
     """Steps 1-2: (h, w) uint8 0/255 edges of a `side` ('left' or 'right') guard rail in the
     (h, w) uint8 grey patch, after erosion and dilation (patch coordinates)."""
-    _check_image("patch", patch)
+    require_grey_image("patch", patch)
     if side not in SIDES:
         raise ValueError(f"side: expected one of {SIDES}, got {side!r}")
     if side == "left":
@@ -347,7 +338,7 @@ def find_start(edges: EdgeImage) -> tuple[int, int] | None:
     """Step 3 on a left-rail edge image (h, w) uint8 (white: > 0): (row, col) of the first
     white pixel of fig. 3's neighbourhood anchored at column 0, from row h // 2 down in
     steps of 3 rows; None when area A holds none."""
-    _check_image("edges", edges)
+    require_grey_image("edges", edges)
     p = _Padded.of(edges)
     start = _find_start(p)
     return None if start is None else (start // p.stride - 1, start % p.stride)
@@ -356,7 +347,7 @@ def find_start(edges: EdgeImage) -> tuple[int, int] | None:
 def follow_line(edges: EdgeImage, start: tuple[int, int], params: GuardRailParams) -> LineTrace:
     """Steps 4-5 on a left-rail edge image (h, w) uint8 (white: > 0) from its white pixel
     `start` (row, col), with `params.max_holes` and `params.min_length_fraction`."""
-    _check_image("edges", edges)
+    require_grey_image("edges", edges)
     h, w = edges.shape
     r, c = start
     if not (0 <= r < h and 0 <= c < w) or not edges[r, c]:
@@ -368,7 +359,7 @@ def follow_line(edges: EdgeImage, start: tuple[int, int], params: GuardRailParam
 def search_line(edges: EdgeImage, params: GuardRailParams) -> LineTrace:
     """Steps 3-5 on a left-rail edge image (h, w) uint8 (white: > 0): `follow_line` from
     `find_start`'s pixel; an empty trace, not a guard rail, when there is none."""
-    _check_image("edges", edges)
+    require_grey_image("edges", edges)
     p = _Padded.of(edges)
     return _trace(p, _find_start(p), params)
 
@@ -414,7 +405,7 @@ def _check_areas(areas: tuple[SearchArea, ...]) -> None:
     for k, area in enumerate(areas):
         if not isinstance(area, SearchArea):
             raise ValueError(f"areas[{k}]: expected a SearchArea, got {type(area).__name__}")
-        _check_image(f"areas[{k}].patch", area.patch)
+        require_grey_image(f"areas[{k}].patch", area.patch)
 
 
 def detect_guard_rails(

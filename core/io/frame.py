@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from core.checks import require_grey_image
 from core.ego import EgoMotion
 
 
@@ -76,9 +77,5 @@ class FrameInput:
     ego: EgoMotion | None = None
 
     def __post_init__(self) -> None:
-        if self.image.dtype != np.uint8 or self.image.ndim != 2:
-            raise ValueError(
-                "image: expected an (H, W) uint8 grey image, "
-                f"got {self.image.dtype} {self.image.shape}"
-            )
+        require_grey_image("image", self.image)
         self.image.flags.writeable = False

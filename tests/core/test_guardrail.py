@@ -441,13 +441,13 @@ def test_bad_parameters_in_a_file_name_the_group() -> None:
 
 def test_bad_patches_and_arguments_are_rejected_by_name() -> None:
     grey = np.zeros((H, W), dtype=np.uint8)
-    with pytest.raises(ValueError, match=r"^patch: expected an \(h, w\) uint8 grey image"):
+    with pytest.raises(ValueError, match=r"^patch: expected an \(H, W\) uint8 grey image"):
         rail_edges(grey.astype(np.float32), "left", PARAMS)
     with pytest.raises(ValueError, match=r"^patch: expected .* got uint8 \(32, 64, 3\)"):
         rail_edges(np.zeros((H, W, 3), dtype=np.uint8), "left", PARAMS)
     with pytest.raises(ValueError, match=r"^side: expected one of \('left', 'right'\)"):
         rail_edges(grey, "up", PARAMS)
-    with pytest.raises(ValueError, match=r"^edges: expected an \(h, w\) uint8"):
+    with pytest.raises(ValueError, match=r"^edges: expected an \(H, W\) uint8"):
         find_start(grey.astype(bool))
     with pytest.raises(ValueError, match=r"^start: expected a white pixel"):
         follow_line(grey, (3, 3), PARAMS)
@@ -456,7 +456,7 @@ def test_bad_patches_and_arguments_are_rejected_by_name() -> None:
     bad = area_of(0, static_target(10.0, 2.0, 20.0), grey)
     bad = dataclasses.replace(bad, patch=grey.astype(np.int16))
     good = area_of(1, static_target(10.0, 2.0, 20.0), grey)
-    with pytest.raises(ValueError, match=r"^areas\[1\]\.patch: expected an \(h, w\) uint8"):
+    with pytest.raises(ValueError, match=r"^areas\[1\]\.patch: expected an \(H, W\) uint8"):
         detect_guard_rails((good, bad), 20.0, PARAMS)
     with pytest.raises(ValueError, match=r"^areas\[0\]: expected a SearchArea"):
         detect_guard_rails((grey,), 20.0, PARAMS)  # type: ignore[arg-type]
