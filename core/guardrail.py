@@ -147,9 +147,11 @@ class LineTrace:
     @property
     def start_px(self) -> tuple[int, int] | None:
         """(row, col) of the start pixel, None when there is none."""
-        if len(self.line_px) == 0:
-            return None
-        return int(self.line_px[0, 0]), int(self.line_px[0, 1])
+        return _first(self.line_px)
+
+
+def _first(pixels: PixelArray) -> tuple[int, int] | None:
+    return None if len(pixels) == 0 else (int(pixels[0, 0]), int(pixels[0, 1]))
 
 
 @dataclass(frozen=True, eq=False)
@@ -158,24 +160,28 @@ class GuardRailCheck:
 
     target_index: the target's index in the frame's radar tuple; side: 'left' or 'right'
     rail looked for; real_speed_mps: its speed over ground; edges: (h, w) uint8 0/255
-    after morphology (steps 1-2; zeros((0, 0)) when not searched); start_px: (row, col) of
-    the first white pixel (None when none was found or not searched); line_px: (N, 2) int32
-    (row, col) followed points; holes_px: (M, 2) int32 positions stepped over as holes;
-    coverage: 0..1 (0 when not searched); verdict: one of VERDICTS, 'overlap' when labelled
-    guard rail by overlap without a search; overlapped_by: target_index of the area whose
-    guard rail labelled this one (None unless 'overlap').
+    after morphology (steps 1-2; zeros((0, 0)) when not searched); start_px (property):
+    (row, col) of the first white pixel (None when none was found or not searched);
+    line_px: (N, 2) int32 (row, col) followed points; holes_px: (M, 2) int32 positions
+    stepped over as holes; coverage: 0..1 (0 when not searched); verdict: one of VERDICTS,
+    'overlap' when labelled guard rail by overlap without a search; overlapped_by:
+    target_index of the area whose guard rail labelled this one (None unless 'overlap').
     """
 
     target_index: int
     side: str
     real_speed_mps: float
     edges: EdgeImage
-    start_px: tuple[int, int] | None
     line_px: PixelArray
     holes_px: PixelArray
     coverage: float
     verdict: str
     overlapped_by: int | None
+
+    @property
+    def start_px(self) -> tuple[int, int] | None:
+        """(row, col) of the first white pixel, None when there is none."""
+        return _first(self.line_px)
 
     @property
     def guard_rail(self) -> bool:
@@ -207,6 +213,11 @@ def real_speed_mps(target: RadarTarget, ego_speed_mps: float) -> float:
     NaN when ego_speed_mps is NaN (unknown): such a target is never slow.
     """
     return target.range_rate_mps + ego_speed_mps * math.cos(target.azimuth_rad)
+
+
+def is_slow(target: RadarTarget, ego_speed_mps: float, params: GuardRailParams) -> bool:
+    """Checked by the filter: real speed below `max_speed_mps` (never with NaN ego speed)."""
+    return abs(real_speed_mps(target, ego_speed_mps)) < params.max_speed_mps
 
 
 # --- steps 1-2: edges -------------------------------------------------------------------------
@@ -392,7 +403,6 @@ def _search(area: SearchArea, speed_mps: float, params: GuardRailParams) -> Guar
         side=side,
         real_speed_mps=speed_mps,
         edges=edges,
-        start_px=None if len(line_px) == 0 else (int(line_px[0, 0]), int(line_px[0, 1])),
         line_px=line_px,
         holes_px=holes_px,
         coverage=trace.coverage,
@@ -424,11 +434,11 @@ def detect_guard_rails(
         )
     if math.isnan(ego_speed_mps):
         return GuardRailResult(())
-    slow = []
-    for area in areas:
-        speed = real_speed_mps(area.target, ego_speed_mps)
-        if abs(speed) < params.max_speed_mps:
-            slow.append((area, speed))
+    slow = [
+        (area, real_speed_mps(area.target, ego_speed_mps))
+        for area in areas
+        if is_slow(area.target, ego_speed_mps, params)
+    ]
     slow.sort(key=lambda item: item[0].x_m)  # stable: equal distances keep radar order
 
     checks: list[GuardRailCheck] = []
@@ -450,7 +460,6 @@ def detect_guard_rails(
                     side=_side(following.target),
                     real_speed_mps=speed,
                     edges=_NOT_SEARCHED,
-                    start_px=None,
                     line_px=_NO_PIXELS,
                     holes_px=_NO_PIXELS,
                     coverage=0.0,

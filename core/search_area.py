@@ -48,8 +48,8 @@ class SearchArea:
     target_index: the target's place in the frame's radar tuple; base_px: (u, v) of the radar
     point on the object's base; full_px: (u0, v0, u1, v1) pixel-edge bounds before cropping;
     box_px: (col0, row0, col1, row1) integer pixel bounds after cropping (end exclusive), so
-    the crop is `image[row0:row1, col0:col1]`; world: x_m of the target and the area's
-    y_left_m, y_right_m (vehicle frame); patch: (h, w) uint8 grey, the crop resampled;
+    the crop is `image[row0:row1, col0:col1]`; y_left_m, y_right_m: the area's sides in the
+    world (vehicle frame), at the target's x_m; patch: (h, w) uint8 grey, the crop resampled;
     px_per_m: patch pixels per metre across at the target's distance.
     """
 
@@ -58,11 +58,15 @@ class SearchArea:
     base_px: tuple[float, float]
     full_px: tuple[float, float, float, float]
     box_px: tuple[int, int, int, int]
-    x_m: float
     y_left_m: float
     y_right_m: float
     patch: npt.NDArray[np.uint8]
     px_per_m: float
+
+    @property
+    def x_m(self) -> float:
+        """The target's distance ahead (vehicle frame)."""
+        return self.target.x_m
 
     @property
     def cropped(self) -> bool:
@@ -80,12 +84,22 @@ class SearchArea:
         return u, v
 
 
+Rect = tuple[float, float, float, float]
+
+
+def rect_area(r: Rect) -> float:
+    """Area of an image rectangle (left, top, right, bottom); 0 when empty."""
+    return max(0.0, r[2] - r[0]) * max(0.0, r[3] - r[1])
+
+
+def intersection_area(a: Rect, b: Rect) -> float:
+    """Area two image rectangles (left, top, right, bottom) share."""
+    return rect_area((max(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), min(a[3], b[3])))
+
+
 def overlap_fraction(a: SearchArea, b: SearchArea) -> float:
     """Share of area `b`'s cropped image rectangle that `a`'s covers (0 .. 1)."""
-    ac0, ar0, ac1, ar1 = a.box_px
-    bc0, br0, bc1, br1 = b.box_px
-    inter = max(0, min(ac1, bc1) - max(ac0, bc0)) * max(0, min(ar1, br1) - max(ar0, br0))
-    return inter / max(1, (bc1 - bc0) * (br1 - br0))
+    return intersection_area(a.box_px, b.box_px) / max(1.0, rect_area(b.box_px))
 
 
 def search_areas(
@@ -141,7 +155,6 @@ def search_areas(
                 base_px=(float(u), float(v)),
                 full_px=full,
                 box_px=(c0, r0, c1, r1),
-                x_m=t.x_m,
                 y_left_m=t.y_m + half_m,
                 y_right_m=t.y_m - half_m,
                 patch=patch,

@@ -85,7 +85,7 @@ import numpy.typing as npt
 from core.camera import CameraModel
 from core.io.frame import RadarTarget
 from core.params import VehicleParams
-from core.search_area import SearchArea
+from core.search_area import SearchArea, intersection_area, rect_area
 
 FloatArray = npt.NDArray[np.float64]
 F32Array = npt.NDArray[np.float32]
@@ -132,8 +132,8 @@ class TargetResult:
     edges of the resampled area; symmetry: (max_half_width_px, 2 w - 1) float32 chi, row k is
     half-width k + 1; threshold: the chi an axis had to reach; candidates: the axes that
     qualified, with their boxes; chosen: index into candidates of the most central box with
-    a bottom; box_px: the chosen box in full-image pixels; verdict: see `Verdict`;
-    vehicle_index: the final vehicle it is part of.
+    a bottom; box_px (property): the chosen box in full-image pixels; verdict: see
+    `Verdict`; vehicle_index: the final vehicle it is part of.
     """
 
     target_index: int
@@ -144,9 +144,12 @@ class TargetResult:
     threshold: float
     candidates: tuple[Candidate, ...]
     chosen: int | None
-    box_px: Box | None
     verdict: Verdict
     vehicle_index: int | None
+
+    @property
+    def box_px(self) -> Box | None:
+        return _chosen_box(self.candidates, self.chosen)
 
 
 @dataclass(frozen=True)
@@ -363,7 +366,11 @@ class _AreaSearch:
 
     @property
     def box_px(self) -> Box | None:
-        return None if self.chosen is None else self.candidates[self.chosen].box_px
+        return _chosen_box(self.candidates, self.chosen)
+
+
+def _chosen_box(candidates: tuple[Candidate, ...], chosen: int | None) -> Box | None:
+    return None if chosen is None else candidates[chosen].box_px
 
 
 def _search(areas: list[SearchArea], params: VehicleParams) -> list[_AreaSearch]:
@@ -461,18 +468,15 @@ def world_size_ok(
     """The world-size filter: is the box as wide as a vehicle (`min_width_m` .. `max_width_m`)
     at the radar's distance?"""
     (width_m,) = world_extents([box_px], [distance_m], camera)[1]
+    return _vehicle_wide(width_m, params)
+
+
+def _vehicle_wide(width_m: float, params: VehicleParams) -> bool:
     return params.min_width_m <= width_m <= params.max_width_m
 
 
-def _area(b: Box) -> float:
-    return max(0.0, b[2] - b[0]) * max(0.0, b[3] - b[1])
-
-
 def _overlap_of_smaller(a: Box, b: Box) -> float:
-    inter = max(0.0, min(a[2], b[2]) - max(a[0], b[0])) * max(
-        0.0, min(a[3], b[3]) - max(a[1], b[1])
-    )
-    return inter / max(min(_area(a), _area(b)), 1e-9)
+    return intersection_area(a, b) / max(min(rect_area(a), rect_area(b)), 1e-9)
 
 
 def merge_boxes(boxes: list[tuple[Box, int]], params: VehicleParams) -> list[tuple[Box, list[int]]]:
@@ -483,7 +487,7 @@ def merge_boxes(boxes: list[tuple[Box, int]], params: VehicleParams) -> list[tup
     at the same height, when the kept box becomes the mean of the boxes merged into it.
     Returns (box, target indices) per kept box, largest first.
     """
-    order = sorted(boxes, key=lambda bt: -_area(bt[0]))
+    order = sorted(boxes, key=lambda bt: -rect_area(bt[0]))
     kept: list[tuple[list[Box], list[int]]] = []  # the boxes averaged into each, their targets
     for box, target in order:
         for members, targets in kept:
@@ -533,7 +537,7 @@ def detect_vehicles(
     sized = [
         (chosen[i], i)
         for i, width_m in zip(ids, widths_m, strict=True)
-        if params.min_width_m <= width_m <= params.max_width_m
+        if _vehicle_wide(width_m, params)
     ]
     merged = merge_boxes(sized, params)
     distances_m = [float(np.mean([radar[t].x_m for t in targets])) for _, targets in merged]
@@ -551,9 +555,7 @@ def detect_vehicles(
         if f is None:
             verdict: Verdict = "outside_image" if area is None else "guard_rail"
             results.append(
-                TargetResult(
-                    i, target, area, empty_edges, empty_sym, 0.0, (), None, None, verdict, None
-                )
+                TargetResult(i, target, area, empty_edges, empty_sym, 0.0, (), None, verdict, None)
             )
             continue
         if i in vehicle_of:
@@ -572,7 +574,6 @@ def detect_vehicles(
                 f.threshold,
                 f.candidates,
                 f.chosen,
-                chosen.get(i),
                 verdict,
                 vehicle_of.get(i),
             )

@@ -120,7 +120,6 @@ def area_of(
         base_px=(col0 + w / 2, 200 + 0.7 * h),
         full_px=(col0 - 0.5, 199.5, col0 + w - 0.5, 199.5 + h),
         box_px=box,
-        x_m=target.x_m,
         y_left_m=target.y_m + 1.25,
         y_right_m=target.y_m - 1.25,
         patch=patch,

@@ -101,9 +101,7 @@ def test_targets_outside_the_image_get_no_area() -> None:
 
 def test_overlap_fraction_is_the_share_of_the_second_area() -> None:
     def area(box: tuple[int, int, int, int]) -> SearchArea:
-        return SearchArea(
-            0, target(20, 0), (0, 0), box, box, 20, 1, -1, np.zeros((2, 2), np.uint8), 1
-        )
+        return SearchArea(0, target(20, 0), (0, 0), box, box, 1, -1, np.zeros((2, 2), np.uint8), 1)
 
     a, b = area((0, 0, 10, 10)), area((5, 0, 25, 10))
     assert overlap_fraction(a, b) == pytest.approx(50 / 200)
