@@ -17,6 +17,7 @@ Figures, not verdicts: the budget is printed beside the median, and nothing fail
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 import json
 import time
@@ -144,14 +145,14 @@ def _vehicle_runs(camera: CameraModel, pairs: Sequence[Pair], params: Params) ->
 
 def _guardrail_runs(camera: CameraModel, pairs: Sequence[Pair], params: Params) -> list[Run]:
     """The guard-rail search on each slow target's area alone (no overlap management)."""
-    from core.guardrail import detect_guard_rails, real_speed_mps
+    from core.guardrail import detect_guard_rails, is_slow
     from core.search_area import search_areas
 
     p = dataclasses.replace(params.guardrail, manage_overlaps=False)
     runs: list[Run] = []
     for _, now in pairs:
         for area in search_areas(now.image, camera, now.radar, params.vehicle):
-            if abs(real_speed_mps(area.target, now.speed_mps)) < p.max_speed_mps:
+            if is_slow(area.target, now.speed_mps, p):
 
                 def run(area=area, speed=now.speed_mps) -> Callable[[], object]:
                     return lambda: detect_guard_rails((area,), speed, p)
@@ -169,43 +170,28 @@ def _frame_pairs(drive: Drive, frames: int) -> list[Pair]:
     return [(drive.frame(k - 1), drive.frame(k)) for k in chosen]
 
 
-def bench_stages(
+def _stage_timings(
     stages: Sequence[str],
-    recording: Path | str,
-    params: Params | None = None,
-    frames: int = 20,
-    warmup: int = 5,
-    repeat: int = 50,
+    camera: CameraModel,
+    pairs: Sequence[Pair],
+    params: Params,
+    warmup: int,
+    repeat: int,
 ) -> dict[str, StageTiming]:
-    """Time each of `stages` (from STAGES) on `frames` frames spread over `recording`."""
-    import cv2
     import numpy as np
 
-    from core.io.drive import Drive
-    from core.params import Params
-
-    for stage in stages:
-        if stage not in STAGES:
-            raise ValueError(f"stage: expected one of {', '.join(STAGES)}, got {stage!r}")
-    params = params or Params()
-    cv2.setNumThreads(1)
-    with Drive(recording) as drive:
-        pairs = _frame_pairs(drive, frames)
-        camera = drive.camera
-    first, stop = camera.row_window_px
     make = {
         "pitch": _pitch_runs,
         "motion_stereo": _motion_stereo_runs,
         "vehicle": _vehicle_runs,
         "guardrail": _guardrail_runs,
     }
+    first, stop = camera.row_window_px
     timings = {}
     for stage in stages:
         runs = make[stage](camera, pairs, params)
         if not runs:
-            raise ValueError(
-                f"{recording}: no {UNIT[stage]} to time {stage} on in {len(pairs)} frames"
-            )
+            raise ValueError(f"no {UNIT[stage]} to time {stage} on in {len(pairs)} frames")
         times = _time_runs(runs, warmup, repeat)
         median = float(np.median(times))
         paper = PAPER_MS[stage]
@@ -244,76 +230,110 @@ class GuardRailSavings:
     frames: int
 
 
-def bench_guard_rail_savings(
-    recording: Path | str,
-    params: Params | None = None,
-    frames: int = 20,
-    warmup: int = 5,
-    repeat: int = 50,
+def _guard_rail_savings(
+    camera: CameraModel, pairs: Sequence[Pair], params: Params, warmup: int, repeat: int
 ) -> GuardRailSavings:
-    """Time VD, GRD and OBM (paper 002, table I) on `frames` frames of `recording`."""
-    import cv2
+    """VD, GRD and OBM (paper 002, table I) on the frames of `pairs`."""
     import numpy as np
 
     from core.guardrail import detect_guard_rails
-    from core.io.drive import Drive
-    from core.params import Params
     from core.search_area import search_areas
     from core.vehicle import detect_vehicles
 
-    params = params or Params()
-    cv2.setNumThreads(1)
-    with Drive(recording) as drive:
-        pairs = _frame_pairs(drive, frames)
-        camera = drive.camera
     p = params.vehicle
-    by_mode = {
-        "vd": None,
-        "grd": dataclasses.replace(params.guardrail, manage_overlaps=False),
-        "obm": dataclasses.replace(params.guardrail, manage_overlaps=True),
-    }
-    medians, searched, rails = {}, {}, []
-    for mode, gp in by_mode.items():
-        runs: list[Run] = []
-        counts = []
-        for _, now in pairs:
+    grd = dataclasses.replace(params.guardrail, manage_overlaps=False)
+    obm = dataclasses.replace(params.guardrail, manage_overlaps=True)
 
-            def run(now: FrameInput = now, gp: GuardRailParams | None = gp) -> Callable[[], object]:
-                def frame() -> object:
-                    areas = search_areas(now.image, camera, now.radar, p)
-                    skip: frozenset[int] = frozenset()
-                    if gp is not None:
-                        skip = detect_guard_rails(areas, now.speed_mps, gp).guard_rail_targets
-                    return detect_vehicles(areas, now.radar, camera, p, skip)
-
-                return frame
-
-            runs.append(run)
+    def run(now: FrameInput, gp: GuardRailParams | None) -> Callable[[], object]:
+        def frame() -> object:
+            areas = search_areas(now.image, camera, now.radar, p)
+            skip: frozenset[int] = frozenset()
             if gp is not None:
-                areas = search_areas(now.image, camera, now.radar, p)
-                result = detect_guard_rails(areas, now.speed_mps, gp)
-                counts.append((len(result.checks), result.searched, len(result.guard_rail_targets)))
-        medians[mode] = float(np.median(_time_runs(runs, warmup, repeat)))
-        if counts:
-            searched[mode] = float(np.mean([c[1] for c in counts]))
-            slow = float(np.mean([c[0] for c in counts]))
-            rails.append(float(np.mean([c[2] for c in counts])))
+                skip = detect_guard_rails(areas, now.speed_mps, gp).guard_rail_targets
+            return detect_vehicles(areas, now.radar, camera, p, skip)
+
+        return frame
+
+    medians = {
+        mode: float(
+            np.median(
+                _time_runs([functools.partial(run, now, gp) for _, now in pairs], warmup, repeat)
+            )
+        )
+        for mode, gp in (("vd", None), ("grd", grd), ("obm", obm))
+    }
+    counts = []  # per frame: targets, slow, searched without and with OBM, guard rails
+    for _, now in pairs:
+        areas = search_areas(now.image, camera, now.radar, p)
+        without, with_obm = (detect_guard_rails(areas, now.speed_mps, gp) for gp in (grd, obm))
+        counts.append(
+            (
+                len(now.radar),
+                len(without.checks),
+                without.searched,
+                with_obm.searched,
+                len(with_obm.guard_rail_targets),
+            )
+        )
+    targets, slow, searched_grd, searched_obm, rails = np.mean(counts, axis=0).tolist()
     return GuardRailSavings(
         vd_ms=medians["vd"],
         grd_ms=medians["grd"],
         obm_ms=medians["obm"],
         reduction=1.0 - medians["obm"] / medians["vd"],
         paper_ms=dict(PAPER_002_MS),
-        targets=float(np.mean([len(now.radar) for _, now in pairs])),
+        targets=targets,
         slow_targets=slow,
-        searched_grd=searched["grd"],
-        searched_obm=searched["obm"],
-        guard_rails=rails[-1],
+        searched_grd=searched_grd,
+        searched_obm=searched_obm,
+        guard_rails=rails,
         frames=len(pairs),
     )
 
 
-def format_table(timings: dict[str, StageTiming], savings: GuardRailSavings | None = None) -> str:
+@dataclass(frozen=True)
+class BenchReport:
+    """Each stage's timing; paper 002's table I when both vehicle and guardrail ran."""
+
+    stages: dict[str, StageTiming]
+    guard_rail_savings: GuardRailSavings | None
+
+
+def bench(
+    stages: Sequence[str],
+    recording: Path | str,
+    params: Params | None = None,
+    frames: int = 20,
+    warmup: int = 5,
+    repeat: int = 50,
+) -> BenchReport:
+    """Time each of `stages` (from STAGES) on `frames` frames spread over `recording`, opened
+    and decoded once; with both vehicle and guardrail, also paper 002's table I."""
+    import cv2
+
+    from core.io.drive import Drive
+    from core.params import Params
+
+    for stage in stages:
+        if stage not in STAGES:
+            raise ValueError(f"stage: expected one of {', '.join(STAGES)}, got {stage!r}")
+    params = params or Params()
+    cv2.setNumThreads(1)
+    with Drive(recording) as drive:
+        pairs = _frame_pairs(drive, frames)
+        camera = drive.camera
+    try:
+        timings = _stage_timings(stages, camera, pairs, params, warmup, repeat)
+    except ValueError as err:
+        raise ValueError(f"{recording}: {err}") from None
+    savings = None
+    if "vehicle" in stages and "guardrail" in stages:
+        savings = _guard_rail_savings(camera, pairs, params, warmup, repeat)
+    return BenchReport(timings, savings)
+
+
+def format_table(report: BenchReport) -> str:
+    timings, savings = report.stages, report.guard_rail_savings
     lines = [
         f"{'stage':<14} {'median ms':>10} {'p90 ms':>8} {'budget ms':>10} "
         f"{'paper ms':>9} {'speed-up':>9}  per, image, runs"
@@ -341,8 +361,8 @@ def format_table(timings: dict[str, StageTiming], savings: GuardRailSavings | No
     return "\n".join(lines)
 
 
-def format_json(timings: dict[str, StageTiming], savings: GuardRailSavings | None = None) -> str:
-    out: dict[str, object] = {"stages": {name: asdict(t) for name, t in timings.items()}}
-    if savings is not None:
-        out["guard_rail_savings"] = asdict(savings)
+def format_json(report: BenchReport) -> str:
+    out: dict[str, object] = {"stages": {name: asdict(t) for name, t in report.stages.items()}}
+    if report.guard_rail_savings is not None:
+        out["guard_rail_savings"] = asdict(report.guard_rail_savings)
     return json.dumps(out, indent=2)

@@ -310,32 +310,19 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from core.bench import (
-        STAGES,
-        bench_guard_rail_savings,
-        bench_stages,
-        format_json,
-        format_table,
-    )
+    from core.bench import STAGES, bench, format_json, format_table
     from core.io.errors import RecordingError
     from core.params import Params, ParamsError, load_params
 
     stages = args.stage or STAGES
     try:
         params = load_params(args.params) if args.params else Params()
-        timings = bench_stages(
-            stages, args.recording, params, frames=args.frames, repeat=args.repeat
-        )
-        savings = None
-        if "vehicle" in stages and "guardrail" in stages:
-            savings = bench_guard_rail_savings(
-                args.recording, params, frames=args.frames, repeat=args.repeat
-            )
+        report = bench(stages, args.recording, params, frames=args.frames, repeat=args.repeat)
     except (ValueError, RecordingError, ParamsError) as err:
         print(f"fusionscope bench: {err}", file=sys.stderr)
         return 2
     out = format_json if args.format == "json" else format_table
-    print(out(timings, savings))
+    print(out(report))
     return 0
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from core.bench import BUDGET_MS, PAPER_MS, STAGES, bench_stages
+from core.bench import BUDGET_MS, PAPER_MS, STAGES, bench
 from core.cli import DEFAULT_RECORDINGS, main
 
 HIGHWAY = DEFAULT_RECORDINGS / "highway"
@@ -64,6 +64,6 @@ def test_bad_input_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert main(["bench", "--recording", str(tmp_path / "missing")]) == 2
     assert "missing" in capsys.readouterr().err
     with pytest.raises(ValueError, match="stage: expected one of pitch, motion_stereo, vehicle"):
-        bench_stages(["symmetry"], HIGHWAY)
+        bench(["symmetry"], HIGHWAY)
     with pytest.raises(SystemExit):
         main(["bench", "--frames", "1"])
