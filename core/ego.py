@@ -100,7 +100,7 @@ def _piecewise_mean(
     return np.interp(mid, (t_ns - origin).astype(np.float64), values)
 
 
-def _window(
+def samples_around(
     t_ns: npt.NDArray[np.int64], values: npt.NDArray[np.float64], t0_ns: int, t1_ns: int
 ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
     """The samples inside (t0, t1) and the one on each side: all interpolation there needs.
@@ -129,8 +129,8 @@ def integrate(
         raise ValueError(f"t1_ns: expected >= t0_ns = {t0_ns}, got {t1_ns}")
     if len(speed_t_ns) == 0 or len(yaw_rate_t_ns) == 0:
         raise ValueError("speed and yaw rate: expected at least one sample each, got none")
-    speed_t_ns, speed_mps = _window(speed_t_ns, speed_mps, t0_ns, t1_ns)
-    yaw_rate_t_ns, yaw_rate_radps = _window(yaw_rate_t_ns, yaw_rate_radps, t0_ns, t1_ns)
+    speed_t_ns, speed_mps = samples_around(speed_t_ns, speed_mps, t0_ns, t1_ns)
+    yaw_rate_t_ns, yaw_rate_radps = samples_around(yaw_rate_t_ns, yaw_rate_radps, t0_ns, t1_ns)
     inner = np.concatenate((speed_t_ns, yaw_rate_t_ns))
     inner = np.unique(inner[(inner > t0_ns) & (inner < t1_ns)])
     edges = np.concatenate(([t0_ns], inner, [t1_ns])).astype(np.int64)

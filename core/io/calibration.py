@@ -19,7 +19,6 @@ Vehicle frame: x forward, y left, z up, metres, origin on the road under the ref
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,6 +27,7 @@ import numpy as np
 import yaml
 
 from core.camera import CameraModel, Extrinsics, Intrinsics
+from core.checks import require_finite
 from core.io.errors import RecordingError
 from core.io.yamlfile import Fields, load_yaml_mapping
 
@@ -49,8 +49,7 @@ class RadarMount:
 
     def __post_init__(self) -> None:
         for name in ("x_m", "y_m", "z_m", "yaw_rad"):
-            if not math.isfinite(getattr(self, name)):
-                raise ValueError(f"{name}: expected a finite number, got {getattr(self, name)!r}")
+            require_finite(name, getattr(self, name))
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ import numpy as np
 import numpy.typing as npt
 from cantools.database.can import Database, Message
 
-from core.ego import STANDSTILL_SPEED_MPS
+from core.ego import STANDSTILL_SPEED_MPS, samples_around
 from core.io.canfiles import iter_log_frames
 from core.io.canframe import CanFrame
 from core.io.errors import RecordingError
@@ -40,6 +40,8 @@ Int64Array = npt.NDArray[np.int64]
 FloatArray = npt.NDArray[np.float64]
 Warn = Callable[[str], None]
 
+# How the yaw-rate bias is estimated: not at all, or from the stretches standing still.
+YAW_RATE_BIAS_MODES = ("none", "standstill")
 SPEED_UNITS_TO_MPS = {"m/s": 1.0, "km/h": 1.0 / 3.6, "mph": 0.44704}
 YAW_RATE_UNITS_TO_RADPS = {"rad/s": 1.0, "deg/s": math.pi / 180.0}
 NS_PER_S = 1_000_000_000
@@ -111,9 +113,7 @@ def _interp(t_ns: npt.ArrayLike, ts_ns: Int64Array, values: FloatArray) -> Float
         return np.zeros(t.shape)
     # Only the samples around t (a frame's lookup in an hour of CAN stays cheap), relative to
     # the first of them so that float64 keeps nanosecond resolution.
-    lo = max(int(np.searchsorted(ts_ns, t.min(), side="right")) - 1, 0)
-    hi = min(int(np.searchsorted(ts_ns, t.max(), side="left")) + 1, len(ts_ns))
-    ts, vs = ts_ns[lo:hi], values[lo:hi]
+    ts, vs = samples_around(ts_ns, values, int(t.min()), int(t.max()))
     return np.interp((t - ts[0]).astype(np.float64), (ts - ts[0]).astype(np.float64), vs)
 
 
@@ -349,10 +349,9 @@ class VehicleSignalDecoder(FrameDecoder):
         standstill_speed_mps: float = STANDSTILL_SPEED_MPS,
         min_standstill_s: float = MIN_STANDSTILL_S,
     ) -> None:
-        if source.yaw_rate_bias not in ("none", "standstill"):
-            raise ValueError(
-                f"yaw_rate_bias: expected 'none' or 'standstill', got {source.yaw_rate_bias!r}"
-            )
+        if source.yaw_rate_bias not in YAW_RATE_BIAS_MODES:
+            expected = " or ".join(repr(m) for m in YAW_RATE_BIAS_MODES)
+            raise ValueError(f"yaw_rate_bias: expected {expected}, got {source.yaw_rate_bias!r}")
         self.source = source
         self.where = where
         self.offset_ns = offset_ns

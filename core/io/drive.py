@@ -20,6 +20,7 @@ Time alignment, per camera frame at stamp t:
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 import time
@@ -141,9 +142,10 @@ class Drive:
         """Ground truth of frame `i`, None when the recording has none for it."""
         return self._truth.get(self._check_index(i))
 
-    @property
+    @functools.cached_property
     def max_radar_skew_ns(self) -> float:
-        """The largest camera-radar time difference accepted for a frame's radar scan."""
+        """The largest camera-radar time difference accepted for a frame's radar scan (the
+        median over the drive's scans, computed once)."""
         if self.manifest.max_radar_skew_ms is not None:
             return self.manifest.max_radar_skew_ms * NS_PER_MS
         return self.radar.median_period_ns / 2 if self.radar is not None else 0.0

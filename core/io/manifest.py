@@ -49,7 +49,12 @@ from typing import Any
 
 import yaml
 
-from core.io.canlog import SPEED_UNITS_TO_MPS, YAW_RATE_UNITS_TO_RADPS, SignalMapping
+from core.io.canlog import (
+    SPEED_UNITS_TO_MPS,
+    YAW_RATE_BIAS_MODES,
+    YAW_RATE_UNITS_TO_RADPS,
+    SignalMapping,
+)
 from core.io.errors import RecordingError
 from core.io.yamlfile import Fields, load_yaml_mapping
 
@@ -57,7 +62,6 @@ MANIFEST_NAME = "recording.yaml"
 MANIFEST_FORMAT_VERSION = 1
 
 
-YAW_RATE_BIAS_MODES = ("none", "standstill")
 DISTANCE_UNITS_TO_M = {"m": 1.0, "cm": 0.01, "ft": 0.3048}
 RANGE_RATE_UNITS_TO_MPS = {"m/s": 1.0, "km/h": 1.0 / 3.6}
 
