@@ -63,9 +63,11 @@ def test_each_client_gets_its_own_newest_request() -> None:
 
 def test_a_failing_render_does_not_end_the_worker() -> None:
     published: list[int] = []
+    rendered: list[int] = []
     done = threading.Semaphore(0)
 
     def render(request: int) -> int:
+        rendered.append(request)
         if request == 0:
             raise RuntimeError("bad frame")
         return request
@@ -76,10 +78,12 @@ def test_a_failing_render_does_not_end_the_worker() -> None:
 
     worker = RenderWorker(render, publish)
     try:
-        worker.submit("tab", 0)
-        worker.submit("tab", 1)
+        # two clients, so the second request does not replace the failing one
+        worker.submit("a", 0)
+        worker.submit("b", 1)
         assert done.acquire(timeout=5.0)
         assert published == [1]
+        assert rendered == [0, 1]
     finally:
         worker.stop()
 
