@@ -68,25 +68,11 @@ RAV4_YAW_RAD = 0.0165
 def rav4(realdata: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The RAV4's first frame imported with its CAN log (speed, yaw rate, radar tracks)."""
     from core.cli import main
+    from core.importer import MAPPING_EXAMPLE
 
     rav4 = realdata / "comma2k19-rav4"
     mapping = tmp_path_factory.mktemp("mapping") / "rav4.yaml"
-    mapping.write_text(
-        """
-can:
-  channel: can0
-  speed: {message: SPEED, signal: SPEED, unit: km/h}
-  yaw_rate: {message: KINEMATICS, signal: YAW_RATE, unit: deg/s}
-radar:
-  can:
-    channel: can1
-    messages: TRACK_A_*
-    distance: {signal: LONG_DIST, unit: m}
-    lateral: {signal: LAT_DIST, unit: m, sign: -1}
-    range_rate: {signal: REL_SPEED, unit: m/s}
-    valid: {signal: VALID}
-"""
-    )
+    mapping.write_text(MAPPING_EXAMPLE)
     out = tmp_path_factory.mktemp("rav4") / "rav4"
     args = ["import", "still", str(rav4 / "first_frame.png"), str(out), "--time-s", "46408.547"]
     args += ["--can", str(rav4 / "rav4_seg40.log.gz"), "--mapping", str(mapping)]

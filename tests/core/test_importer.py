@@ -252,7 +252,7 @@ def import_rav4(realdata: Path, tmp_path: Path, capsys: pytest.CaptureFixture[st
     return out
 
 
-def test_rav4_still_with_can_writes_manifest_and_calibration(
+def test_rav4_still_with_can_writes_manifest_and_calibration_and_opens(
     realdata: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = import_rav4(realdata, tmp_path, capsys)
@@ -279,12 +279,7 @@ def test_rav4_still_with_can_writes_manifest_and_calibration(
     assert (i.fx_px, i.fy_px) == pytest.approx((910 * sx, 910 * sy))
     assert (i.cx_px, i.cy_px) == pytest.approx((582.5 * sx - 0.5, 437.5 * sy - 0.5))
     assert cal.radar_mount.x_m == RAV4_RADAR_X_M and cal.camera.extrinsics.height_m == 1.2
-
-
-def test_rav4_still_opens_with_speed_and_radar_tracks(
-    realdata: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    out = import_rav4(realdata, tmp_path, capsys)
+    # and it opens, with speed and radar tracks
     with Drive(out) as drive:
         assert len(drive) == 1 and drive.times_ns[0] == round(RAV4_TIME_S * NS)
         frame = drive.frame(0)
