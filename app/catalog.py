@@ -4,14 +4,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-RECORDING_MANIFEST = "recording.yaml"
+from core.io.manifest import MANIFEST_NAME
 
 
 def list_recordings(root: Path) -> list[str]:
     """Sorted names of the folders directly under `root` that hold a `recording.yaml`."""
     if not root.is_dir():
         raise ValueError(f"recordings root: expected a folder, got {root}")
-    return sorted(p.name for p in root.iterdir() if (p / RECORDING_MANIFEST).is_file())
+    return sorted(p.name for p in root.iterdir() if (p / MANIFEST_NAME).is_file())
 
 
 def resolve_recording(root: Path, name: str) -> Path:

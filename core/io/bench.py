@@ -29,6 +29,7 @@ import numpy.typing as npt
 from core.camera import Intrinsics
 from core.io.drive import Drive
 from core.io.frame import RadarTarget
+from core.io.manifest import MANIFEST_NAME
 from core.io.writer import RecordingWriter
 from core.synth.generate import synthetic_calibration
 
@@ -88,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     tmp = tempfile.TemporaryDirectory(prefix="fusionscope-bench-")
     os.environ.setdefault("FUSIONSCOPE_CACHE_DIR", str(Path(tmp.name) / "cache"))
     folder = args.keep or Path(tmp.name) / "long"
-    if not (folder / "recording.yaml").is_file():
+    if not (folder / MANIFEST_NAME).is_file():
         started = time.perf_counter()
         write_long_drive(folder, args.seconds)
         print(f"wrote {folder} in {time.perf_counter() - started:.1f} s")

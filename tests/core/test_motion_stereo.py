@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from pathlib import Path
 
 import cv2
 import numpy as np
@@ -20,6 +19,7 @@ import pytest
 from roadscenes import RoadRenderer, camera, straight_road
 
 from core.camera import BirdEyeGrid, CameraModel
+from core.cli import DEFAULT_RECORDINGS
 from core.ego import EgoMotion
 from core.io.canlog import STANDSTILL_SPEED_MPS
 from core.io.drive import Drive
@@ -32,7 +32,7 @@ from core.motion_stereo import (
 from core.params import MotionStereoParams
 from core.synth.scene import StaticObject, Trajectory, Vehicle
 
-BUNDLED = Path(__file__).resolve().parents[2] / "recordings"
+BUNDLED = DEFAULT_RECORDINGS
 
 Mask = npt.NDArray[np.bool_]
 U8 = npt.NDArray[np.uint8]

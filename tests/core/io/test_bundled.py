@@ -3,15 +3,15 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from core.cli import DEFAULT_RECORDINGS
 from core.io import Drive
 from core.synth.sensors import CanModel
 
-RECORDINGS = Path(__file__).resolve().parents[3] / "recordings"
+RECORDINGS = DEFAULT_RECORDINGS
 
 
 @pytest.mark.parametrize("name", ["highway", "exurban", "stop_and_go"])

@@ -31,16 +31,13 @@ from core.io.can_radar import RadarCanDecoder
 from core.io.canfiles import iter_log_frames
 from core.io.canframe import CanFrame
 from core.io.canlog import (
-    SPEED_UNITS_TO_MPS,
-    YAW_RATE_UNITS_TO_RADPS,
-    SignalMapping,
     VehicleSignalDecoder,
     decode_frames,
     load_dbc,
 )
 from core.io.errors import RecordingError
 from core.io.manifest import CanBus, CanSource, RadarCanSource, RadarField
-from core.io.writer import vehicle_dbc_path
+from core.io.writer import SPEED_SIGNAL, YAW_RATE_SIGNAL, vehicle_dbc_path
 
 pytestmark = pytest.mark.fuzz
 
@@ -154,8 +151,8 @@ def _decode_all(frames: list[CanFrame], folder: Path) -> None:
         load_dbc([vehicle_dbc_path()]),
         CanSource(
             CanBus(("vehicle.dbc",), log="x.log"),
-            SignalMapping("SPEED", "SPEED", "km/h", SPEED_UNITS_TO_MPS["km/h"]),
-            SignalMapping("KINEMATICS", "YAW_RATE", "deg/s", YAW_RATE_UNITS_TO_RADPS["deg/s"]),
+            SPEED_SIGNAL,
+            YAW_RATE_SIGNAL,
             "standstill",
         ),
         "fuzz",

@@ -17,9 +17,6 @@ from core.io.can_radar import RadarCanDecoder, natural_key
 from core.io.canfiles import iter_log_frames
 from core.io.canframe import CanFrame
 from core.io.canlog import (
-    SPEED_UNITS_TO_MPS,
-    YAW_RATE_UNITS_TO_RADPS,
-    SignalMapping,
     VehicleSignalDecoder,
     decode_frames,
     load_dbc,
@@ -28,6 +25,7 @@ from core.io.errors import RecordingError
 from core.io.frame import RadarTarget
 from core.io.manifest import CanBus, CanSource, RadarCanSource, RadarField
 from core.io.radarscans import RadarScans
+from core.io.writer import SPEED_SIGNAL, YAW_RATE_SIGNAL
 
 NS = 1_000_000_000
 N_SLOTS = 12
@@ -277,8 +275,8 @@ def test_one_pass_over_a_log_feeds_speed_on_can0_and_radar_on_can1(
         )
     vehicle_source = CanSource(
         CanBus(("radar.dbc",), log=log.name, channel="can0"),
-        SignalMapping("SPEED", "SPEED", "km/h", SPEED_UNITS_TO_MPS["km/h"]),
-        SignalMapping("KINEMATICS", "YAW_RATE", "deg/s", YAW_RATE_UNITS_TO_RADPS["deg/s"]),
+        SPEED_SIGNAL,
+        YAW_RATE_SIGNAL,
     )
     vehicle = VehicleSignalDecoder(db, vehicle_source, str(log))
     radar = RadarCanDecoder(db, _source(), str(log))

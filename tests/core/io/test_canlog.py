@@ -27,10 +27,10 @@ from core.io.canlog import (
 )
 from core.io.errors import RecordingError
 from core.io.manifest import CanBus, CanSource
-from core.io.writer import vehicle_dbc_path
+from core.io.writer import SPEED_SIGNAL, YAW_RATE_SIGNAL, vehicle_dbc_path
 
-SPEED = SignalMapping("SPEED", "SPEED", "km/h", SPEED_UNITS_TO_MPS["km/h"])
-YAW_RATE = SignalMapping("KINEMATICS", "YAW_RATE", "deg/s", YAW_RATE_UNITS_TO_RADPS["deg/s"])
+SPEED = SPEED_SIGNAL
+YAW_RATE = YAW_RATE_SIGNAL
 NS = 1_000_000_000
 
 # Speed as in the RAV4 (0.01 km/h), yaw rate finer than the RAV4's 0.244 deg/s so that a

@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core.cli import main
+from core.cli import DEFAULT_RECORDINGS, main
 from core.io import Drive, RecordingError
 from core.synth.generate import CAMERA_PITCH_RAD, generate
 
-BUNDLED = Path(__file__).resolve().parents[3] / "recordings"
+BUNDLED = DEFAULT_RECORDINGS
 
 
 def _files(folder: Path) -> dict[str, bytes]:
