@@ -24,6 +24,7 @@ from app.session import ClientSession
 from app.state import ViewState
 from app.view import FrameSource, FrameView, render_view
 from app.worker import RenderWorker
+from core.io import Drive
 from core.io.errors import RecordingError
 
 log = logging.getLogger(__name__)
@@ -32,9 +33,7 @@ DriveOpener = Callable[[Path], FrameSource]
 
 
 def open_drive(path: Path) -> FrameSource:
-    """`core.io.Drive(path)`, imported on first use."""
-    from core.io import Drive
-
+    """`core.io.Drive(path)`."""
     drive: FrameSource = Drive(path)
     return drive
 

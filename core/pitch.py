@@ -74,6 +74,7 @@ import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import cv2
 import numpy as np
@@ -86,7 +87,7 @@ FloatArray = npt.NDArray[np.float64]
 BoolImage = npt.NDArray[np.bool_]
 LabelImage = npt.NDArray[np.int32]
 
-METHODS = ("vanishing_point", "horizon_tracking", "calibration")
+Method = Literal["vanishing_point", "horizon_tracking", "calibration"]
 ROW_SPAN_PER_SIGMA = math.sqrt(3.0)  # half-range / standard deviation of a uniform spread
 # Lines whose normals are this close to parallel have no usable intersection.
 MIN_INTERSECTION_SINE = 1e-9
@@ -169,7 +170,7 @@ class PitchResult:
     - window_row0_px, row_histogram: (h,) edge pixels of both signs on each row from
       window_row0_px down; tracking_shift_px: rows the histogram moved since the previous
       frame (None without one);
-    - horizon_row_px, pitch_rad: the answer; method: which of METHODS gave it;
+    - horizon_row_px, pitch_rad: the answer; method: which `Method` gave it;
     - memory: what the next frame needs.
     """
 
@@ -195,7 +196,7 @@ class PitchResult:
     tracking_shift_px: int | None
     horizon_row_px: float
     pitch_rad: float
-    method: str
+    method: Method
     memory: PitchMemory
 
 
@@ -529,6 +530,7 @@ def detect_pitch(
         if previous is None
         else histogram_shift(edges.histogram, previous.row_histogram, params.max_tracking_offset_px)
     )
+    method: Method
     if vp is not None and confidence >= params.min_confidence and spread <= params.max_spread_px:
         method, horizon = "vanishing_point", float(vp[1])
     elif shift is not None and previous is not None:

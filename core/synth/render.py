@@ -55,7 +55,6 @@ class Pose:
     """Ego pose at one time: world position of the vehicle-frame origin and heading."""
 
     s_m: float
-    d_m: float
     x_m: float
     y_m: float
     heading_rad: float
@@ -70,7 +69,7 @@ class Pose:
 def ego_pose(scene: Scene, t_s: float) -> Pose:
     s, d = scene.ego.at(t_s)
     X, Y = scene.road.to_world(s, d)
-    return Pose(s, d, float(X), float(Y), float(scene.road.heading(s)))
+    return Pose(s, float(X), float(Y), float(scene.road.heading(s)))
 
 
 @dataclass(frozen=True, eq=False)

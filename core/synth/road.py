@@ -55,10 +55,6 @@ class Road:
         y -= np.interp(0.0, s, y)
         return cls(s, x, y, heading, kappa)
 
-    @property
-    def s_end_m(self) -> float:
-        return float(self.s_m[-1])
-
     def curvature(self, s_m: npt.ArrayLike) -> FloatArray:
         return np.interp(np.asarray(s_m, dtype=np.float64), self.s_m, self.curvature_1pm)
 
