@@ -22,6 +22,7 @@ Notes:
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -255,10 +256,14 @@ class CameraModel:
         pitch)."""
         return replace(self, extrinsics=replace(self.extrinsics, pitch_rad=pitch_rad))
 
-    @property
+    @functools.cached_property
     def R_vehicle_camera(self) -> FloatArray:  # noqa: N802 (frame-naming convention, STYLE 6)
+        """(3, 3) rotates camera-frame directions into the vehicle frame (read-only, computed
+        once per model: every projection uses it)."""
         e = self.extrinsics
-        return _rot_z(e.yaw_rad) @ _rot_y(e.pitch_rad) @ _rot_x(e.roll_rad) @ R_VEHICLE_OPTICAL
+        R = _rot_z(e.yaw_rad) @ _rot_y(e.pitch_rad) @ _rot_x(e.roll_rad) @ R_VEHICLE_OPTICAL
+        R.flags.writeable = False
+        return R
 
     @property
     def position_vehicle_m(self) -> FloatArray:
@@ -273,13 +278,14 @@ class CameraModel:
         T[:3, 3] = self.position_vehicle_m
         return T
 
-    @property
+    @functools.cached_property
     def T_camera_vehicle(self) -> FloatArray:  # noqa: N802 (frame-naming convention, STYLE 6)
-        """(4, 4) maps vehicle-frame points into the camera frame."""
+        """(4, 4) maps vehicle-frame points into the camera frame (read-only, computed once)."""
         R = self.R_vehicle_camera
         T = np.eye(4)
         T[:3, :3] = R.T
         T[:3, 3] = -R.T @ self.position_vehicle_m
+        T.flags.writeable = False
         return T
 
     # --- lens ---------------------------------------------------------------------------
@@ -335,7 +341,7 @@ class CameraModel:
             [(p[:, 0] - i.cx_px) / i.fx_px, (p[:, 1] - i.cy_px) / i.fy_px, np.ones(len(p))], axis=1
         )
         d = d_cam @ self.R_vehicle_camera.T
-        return d / np.linalg.norm(d, axis=1, keepdims=True)
+        return d / np.sqrt((d * d).sum(axis=1, keepdims=True))
 
     def point_at_height(self, pts_img_px: npt.ArrayLike, z_m: float | npt.ArrayLike) -> FloatArray:
         """(N, 2) pixels -> (N, 3) vehicle-frame points where their rays cross the plane z = z_m.

@@ -146,7 +146,7 @@ def search_areas(
         patch: npt.NDArray[np.uint8] = (
             crop
             if scale == 1.0
-            else np.asarray(cv2.resize(crop, size, interpolation=cv2.INTER_AREA))
+            else np.asarray(cv2.resize(crop, size, interpolation=cv2.INTER_LINEAR))
         )
         areas.append(
             SearchArea(

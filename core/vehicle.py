@@ -73,7 +73,6 @@ Notes:
 from __future__ import annotations
 
 import functools
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -178,28 +177,49 @@ class VehicleResult:
 def signed_vertical_edges(patch: npt.NDArray[np.uint8], threshold: float) -> I8Array:
     """(h, w) uint8 -> (h, w) int8: +1 / -1 where the horizontal derivative is above
     `threshold` / below -threshold (3x3 Sobel), else 0."""
-    d = cv2.Sobel(patch, cv2.CV_16S, 1, 0, ksize=3)
+    return _signed(np.asarray(cv2.Sobel(patch, cv2.CV_16S, 1, 0, ksize=3)), threshold)
+
+
+def _signed(d: npt.NDArray[np.int16], threshold: float) -> I8Array:
+    """+1 / -1 where `d` is above `threshold` / below -threshold, else 0 (int8)."""
     return (d > threshold).astype(np.int8) - (d < -threshold).astype(np.int8)
+
+
+def _sobel_stack(patches: list[npt.NDArray[np.uint8]], dx: int, dy: int) -> npt.NDArray[np.int16]:
+    """(T, h, w) 3x3 Sobel derivatives of `patches` (dx, dy: its orders), each in its own
+    area's size and 0 beyond (h, w: the largest)."""
+    out = np.zeros((len(patches), *np.max([p.shape for p in patches], axis=0)), dtype=np.int16)
+    for t, patch in enumerate(patches):
+        h, w = patch.shape
+        out[t, :h, :w] = cv2.Sobel(patch, cv2.CV_16S, dx, dy, ksize=3)
+    return out
 
 
 @functools.lru_cache(maxsize=64)
 def _mirror_index(width: int, max_half: int) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]:
-    """Indices of `mirrored_pairs` for an area `width` columns wide.
+    """Indices of `mirrored_pairs` for an area `width` columns wide, (max_half, 2 width - 1)
+    each.
 
-    Axis a (0 .. 2 width - 2) lies at column a / 2; row k - 1 (k = 1 .. max_half) pairs the
+    Axis a (0 .. 2 width - 2) lies at column a / 2; half-width k (1 .. max_half) pairs the
     columns (a - d) / 2 and (a + d) / 2 at distance d = 2 k (whole axes) or 2 k - 1 (half
-    axes). Returns the flat indices of those pairs into a (width + 1)^2 matrix (pairs
-    falling outside the area point at its padding corner, which holds 0) and the
-    prefix-sum bounds of the windows between them.
+    axes). Returns the flat indices of those pairs into a (width, width) matrix (pairs
+    falling outside the area point at (0, 0): no column holds edges of both signs, so that
+    entry is 0) and of the window between them, (first column, stop column) clipped to the
+    area, into a (width + 1, width + 1) matrix.
     """
     k = np.arange(1, max_half + 1)[:, None]
     a = np.arange(2 * width - 1)[None, :]
     d = 2 * k - a % 2
     left, right = (a - d) // 2, (a + d) // 2
-    ok = (left >= 0) & (right < width)
-    flat = np.where(ok, left * (width + 1) + right, width * (width + 1) + width)
-    bounds = np.stack([np.clip(left, 0, width), np.clip(right + 1, 0, width)])
-    return flat, bounds
+    pair = np.where((left >= 0) & (right < width), left * width + right, 0)
+    window = np.clip(left, 0, width) * (width + 1) + np.clip(right + 1, 0, width)
+    return pair, window
+
+
+@functools.lru_cache(maxsize=8)
+def _lower_ones(size: int) -> F32Array:
+    """(size, size) lower-triangular ones: its product with a matrix sums its rows down."""
+    return np.tril(np.ones((size, size), dtype=np.float32))
 
 
 def mirrored_pairs(edges: I8Array, max_half_width_px: int) -> tuple[F32Array, F32Array]:
@@ -218,15 +238,17 @@ def mirrored_pairs(edges: I8Array, max_half_width_px: int) -> tuple[F32Array, F3
     stack = edges.reshape(-1, h, w)
     pos = (stack > 0).astype(np.float32)
     neg = (stack < 0).astype(np.float32)
-    opposite = np.zeros((len(stack), w + 1, w + 1), dtype=np.float32)
     m = pos.transpose(0, 2, 1) @ neg  # m[t, i, j]: rows with + at column i and - at column j
-    opposite[:, :w, :w] = m + m.transpose(0, 2, 1)
-    flat, (lo, hi) = _mirror_index(w, max_half_width_px)
-    counts = np.zeros((len(stack), w + 1), dtype=np.float32)
+    opposite = (m + m.transpose(0, 2, 1)).reshape(len(stack), w * w)
+    counts = np.zeros((len(stack), w + 1), dtype=np.float32)  # edges left of each column
     np.cumsum((pos + neg).sum(axis=1), axis=1, out=counts[:, 1:])
-    shape = (*lead, *flat.shape)
-    pairs = opposite.reshape(len(stack), -1)[:, flat]
-    return pairs.reshape(shape), (counts[:, hi] - counts[:, lo]).reshape(shape)
+    between = counts[:, None, :] - counts[:, :, None]  # [t, i, j]: edges in columns i .. j - 1
+    pair, window = _mirror_index(w, max_half_width_px)
+    shape = (*lead, *pair.shape)
+    return (
+        np.take(opposite, pair, axis=1).reshape(shape),
+        np.take(between.reshape(len(stack), -1), window, axis=1).reshape(shape),
+    )
 
 
 def chi_matrix(pairs: F32Array, n: F32Array) -> F32Array:
@@ -236,7 +258,7 @@ def chi_matrix(pairs: F32Array, n: F32Array) -> F32Array:
     pairs, n: from `mirrored_pairs`; s, the pairs within half-width k + 1, is their running
     sum down the rows.
     """
-    s = np.cumsum(pairs, axis=-2)
+    s = _lower_ones(pairs.shape[-2]) @ pairs
     chi = s * s
     chi /= np.maximum(n, 1.0)  # s > 0 only where the window holds edges (n >= 2)
     return chi
@@ -251,6 +273,18 @@ def symmetry_matrix(edges: I8Array, max_half_width_px: int) -> F32Array:
 # --- step 6 ----------------------------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class _Axes:
+    """Candidate axes of T areas, one entry per axis: its area, axis column a (at a / 2),
+    vehicle half-width row k (half-width k + 1), chi there and half-width in pixels."""
+
+    area: npt.NDArray[np.intp]
+    axis: npt.NDArray[np.intp]
+    row: npt.NDArray[np.intp]
+    chi: F32Array
+    half_px: FloatArray
+
+
 def candidate_axes(
     symmetry: F32Array,
     pairs: F32Array,
@@ -259,19 +293,19 @@ def candidate_axes(
     min_half_px: int,
     max_half_px: int,
 ) -> list[tuple[float, int, float, float]]:
-    """(axis column, half-width row, chi, half_width_px) of the axes that may be a
-    vehicle's (step 6).
+    """(axis column, half-width, chi, half_width_px) of the axes that may be a vehicle's
+    (step 6).
 
     symmetry, pairs: (K, 2 w - 1) from `chi_matrix` and `mirrored_pairs`. An axis qualifies
     when chi stays below `threshold` for half-widths < narrow_half_px and reaches it at its
     vehicle half-width: the half-width in min_half_px .. max_half_px with the most mirrored
     pairs summed with its two neighbours (a border's Sobel edge is two or three pixels
-    wide); half-width row: that half-width, whose chi is given; half_width_px: the mean
-    distance of those pairs, the border's position (a border at a pixel edge gives edge
-    pixels on both sides of it, so their pairs' mean distance is the border's). One axis
-    per run of neighbouring qualifying axes: the one with the highest chi at its width.
+    wide); chi is given at that half-width; half_width_px: the mean distance of those pairs,
+    the border's position (a border at a pixel edge gives edge pixels on both sides of it, so
+    their pairs' mean distance is the border's). One axis per run of neighbouring qualifying
+    axes: the one with the highest chi at its width.
     """
-    ok, k, chi_at = _qualifying(
+    found = _candidate_axes(
         symmetry[None],
         pairs[None],
         np.array([threshold]),
@@ -279,81 +313,108 @@ def candidate_axes(
         np.array([min_half_px]),
         np.array([max_half_px]),
     )
-    return _best_of_runs(ok[0], k[0], chi_at[0], pairs)
+    return list(
+        zip(
+            (found.axis / 2).tolist(),
+            (found.row + 1).tolist(),
+            found.chi.tolist(),
+            found.half_px.tolist(),
+            strict=True,
+        )
+    )
 
 
-def _qualifying(
+def _candidate_axes(
     symmetry: F32Array,
     pairs: F32Array,
     threshold: FloatArray,
     narrow_half_px: npt.NDArray[np.int_],
     min_half_px: npt.NDArray[np.int_],
     max_half_px: npt.NDArray[np.int_],
-) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.intp], F32Array]:
-    """`candidate_axes` for T areas at once: symmetry, pairs (T, K, A); the rest (T,).
-    Returns (T, A) arrays: qualifies, the vehicle half-width's row, chi there."""
-    rows = np.arange(symmetry.shape[1])[None, :, None]
+) -> _Axes:
+    """`candidate_axes` for T areas at once: symmetry, pairs (T, K, A); the rest (T,)."""
+    n_areas, n_rows, n_axes = symmetry.shape
+    rows = np.arange(n_rows)[None, :]
     near = pairs.copy()
     near[:, 1:] += pairs[:, :-1]
     near[:, :-1] += pairs[:, 1:]
-    k_min = (np.maximum(min_half_px, 1) - 1)[:, None, None]
-    k_max = np.minimum(max_half_px, symmetry.shape[1])[:, None, None]
-    k = np.argmax(np.where((rows >= k_min) & (rows < k_max), near, -1.0), axis=1)
-    chi_at = np.take_along_axis(symmetry, k[:, None, :], axis=1)[:, 0]
-    near_at = np.take_along_axis(near, k[:, None, :], axis=1)[:, 0]
-    thr = threshold[:, None, None]
-    narrow = ((symmetry >= thr) & (rows < (narrow_half_px - 1)[:, None, None])).any(axis=1)
-    ok = ~narrow & (chi_at >= thr[:, 0]) & (near_at > 0) & (k_max > k_min)[:, 0]
-    return ok, k, chi_at
-
-
-def _best_of_runs(
-    ok: npt.NDArray[np.bool_], k: npt.NDArray[np.intp], chi_at: F32Array, pairs: F32Array
-) -> list[tuple[float, int, float, float]]:
-    """One axis per run of neighbouring qualifying axes (see `candidate_axes`)."""
-    axes = np.flatnonzero(ok)
-    out: list[tuple[float, int, float, float]] = []
-    for run in np.split(axes, np.flatnonzero(np.diff(axes) > 1) + 1) if len(axes) else ():
-        best = int(run[np.argmax(chi_at[run])])
-        rows = np.arange(max(k[best] - 1, 0), min(k[best] + 2, len(pairs)))
-        # pair distance / 2, from pixel centres: k on whole axes, k - 1/2 on half ones
-        half_px = float(np.average(rows + 1 - 0.5 * (best % 2), weights=pairs[rows, best]))
-        out.append((best / 2, int(k[best]) + 1, float(chi_at[best]), half_px))
-    return out
+    # the vehicle half-width: a max over rows of near * base + (base - 1 - row) finds the
+    # most pairs and, among equals, the lowest row (near holds whole numbers)
+    base = 2 ** n_rows.bit_length()
+    vehicle_rows = (rows >= np.maximum(min_half_px, 1)[:, None] - 1) & (
+        rows < np.minimum(max_half_px, n_rows)[:, None]
+    )
+    rank = np.where(vehicle_rows, base - 1 - rows, base - 1 - 2.0**23).astype(np.float32)
+    best_near = (near * base + rank[:, :, None]).max(axis=1)  # (T, A); < 0: no such rows
+    k = (base - 1 - best_near % base).astype(np.intp)  # row 0 where there are no such rows
+    at_k = (np.arange(n_areas)[:, None] * n_rows + k) * n_axes + np.arange(n_axes)
+    chi_at = symmetry.reshape(-1)[at_k]
+    # "low for narrow widths": the few rows below narrow_half_px
+    narrow = max(int(narrow_half_px.max()) - 1, 0)
+    narrow_rows = (rows[:, :narrow] < narrow_half_px[:, None] - 1)[:, :, None]
+    narrow_chi = np.where(narrow_rows, symmetry[:, :narrow], 0.0).max(axis=1, initial=0.0)
+    thr = threshold[:, None]
+    ok = (narrow_chi < thr) & (chi_at >= thr) & (best_near >= base)
+    # one axis per run: a False column after each area's axes keeps runs apart
+    padded = np.zeros((n_areas, n_axes + 1), dtype=bool)
+    padded[:, :n_axes] = ok
+    flat = np.flatnonzero(padded)
+    area, axis = np.divmod(flat, n_axes + 1)
+    starts = np.ones(len(flat), dtype=bool)
+    starts[1:] = flat[1:] - flat[:-1] > 1
+    run = np.cumsum(starts)
+    order = np.lexsort((-chi_at[area, axis], run))  # per run, highest chi first (stable)
+    best = order[starts]  # runs are numbered in order, one start each
+    area, axis = area[best], axis[best]
+    k_best = k[area, axis]
+    # the half-width: the mean distance of the pairs in rows k - 1 .. k + 1
+    near_rows = k_best[:, None] + np.arange(-1, 2)[None, :]
+    inside = (near_rows >= 0) & (near_rows < n_rows)
+    weights = np.where(inside, pairs[area[:, None], near_rows % n_rows, axis[:, None]], 0.0)
+    # pair distance / 2, from pixel centres: k on whole axes, k - 1/2 on half ones
+    distance = near_rows + 1 - 0.5 * (axis % 2)[:, None]
+    half_px = (weights * distance).sum(axis=1) / weights.sum(axis=1)
+    return _Axes(area, axis, k_best, chi_at[area, axis], half_px)
 
 
 # --- step 7 ----------------------------------------------------------------------------------
 
 
-def find_bottom(
-    d_down: npt.NDArray[np.int16], col0: int, col1: int, params: VehicleParams
-) -> int | None:
-    """Lowest pixel-edge row between a darker row above and a brighter row below over at
-    least `bottom_edge_fraction` of columns col0 .. col1 - 1; None when there is none.
+def _box_rows(
+    d_down: npt.NDArray[np.int16],
+    area: npt.NDArray[np.intp],
+    col0: npt.NDArray[np.intp],
+    col1: npt.NDArray[np.intp],
+    params: VehicleParams,
+) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]:
+    """Step 7 for C candidates at once: their (bottom, top) pixel-edge rows, -1 where none.
 
-    d_down: (h, w) vertical Sobel derivative of the area (positive: brighter below).
+    d_down: (T, h, w) vertical Sobel derivatives of the areas (positive: brighter below; 0
+    beyond an area's own size); area, col0, col1: (C,) each candidate's area and columns
+    col0 .. col1 - 1. The bottom: the lowest row between a darker row above and a brighter
+    row below over at least `bottom_edge_fraction` of the columns. The top: the highest row
+    at least `min_height_ratio` x width above the bottom with horizontal edges of either
+    sign over `top_edge_fraction` of the columns.
     """
-    share = (d_down[:, col0:col1] > params.edge_threshold).mean(axis=1)
-    rows = np.flatnonzero(share >= params.bottom_edge_fraction)
-    return None if len(rows) == 0 else int(rows[-1])
-
-
-def find_top(
-    d_down: npt.NDArray[np.int16], col0: int, col1: int, bottom: int, params: VehicleParams
-) -> int | None:
-    """Highest pixel-edge row at least `min_height_ratio` x width above `bottom` with
-    horizontal edges of either sign over `top_edge_fraction` of the columns; None when there
-    is none."""
-    highest = bottom - math.ceil(params.min_height_ratio * (col1 - col0))
-    if highest <= 0:
-        return None
-    share = (np.abs(d_down[:highest, col0:col1]) > params.edge_threshold).mean(axis=1)
-    rows = np.flatnonzero(share >= params.top_edge_fraction)
+    n_areas, n_rows, n_cols = d_down.shape
+    thr = params.edge_threshold
+    masks = np.concatenate([d_down > thr, np.abs(d_down) > thr]).astype(np.float32)
+    columns = np.arange(n_cols)[:, None]
+    chosen = ((columns >= col0) & (columns < col1)).astype(np.float32)  # (w, C)
+    counts = (masks.reshape(-1, n_cols) @ chosen).reshape(2, n_areas, n_rows, -1)
+    c = np.arange(len(area))
+    width = np.maximum(col1 - col0, 1)[:, None]
+    rows = np.arange(n_rows)[None, :]
+    below = counts[0, area, :, c] / width >= params.bottom_edge_fraction  # (C, h)
+    bottom = np.where(below.any(axis=1), n_rows - 1 - np.argmax(below[:, ::-1], axis=1), -1)
+    highest = bottom - np.ceil(params.min_height_ratio * (col1 - col0)).astype(np.intp)
+    across = (counts[1, area, :, c] / width >= params.top_edge_fraction) & (rows < highest[:, None])
     # the highest of the edge's two Sobel rows lies just above it
-    return None if len(rows) == 0 else int(rows[0]) + 1
+    top = np.where(across.any(axis=1), np.argmax(across, axis=1) + 1, -1)
+    return bottom, top
 
 
-# --- steps 4-8 for one area ------------------------------------------------------------------
+# --- steps 4-8 for the areas of a frame ------------------------------------------------------
 
 
 @dataclass(frozen=True, eq=False)
@@ -374,19 +435,16 @@ def _chosen_box(candidates: tuple[Candidate, ...], chosen: int | None) -> Box | 
 
 
 def _search(areas: list[SearchArea], params: VehicleParams) -> list[_AreaSearch]:
-    """Steps 4-8 on each of `areas`; steps 5-6 on all of them at once (padded to one size)."""
+    """Steps 4-8 on each of `areas`, all at once (padded to one size)."""
     if not areas:
         return []
-    edges = [signed_vertical_edges(a.patch, params.edge_threshold) for a in areas]
-    sizes = np.array([e.shape for e in edges])
-    stack = np.zeros((len(edges), *sizes.max(axis=0)), dtype=np.int8)
-    for t, e in enumerate(edges):
-        stack[t, : e.shape[0], : e.shape[1]] = e
-    pairs, n = mirrored_pairs(stack, params.max_half_width_px)
+    sizes = np.array([a.patch.shape for a in areas])
+    edges = _signed(_sobel_stack([a.patch for a in areas], 1, 0), params.edge_threshold)
+    pairs, n = mirrored_pairs(edges, params.max_half_width_px)
     symmetry = chi_matrix(pairs, n)
     px_per_m = np.array([a.px_per_m for a in areas])
     thresholds = params.symmetry_threshold * sizes[:, 0]
-    ok, k, chi_at = _qualifying(
+    axes = _candidate_axes(
         symmetry,
         pairs,
         thresholds,
@@ -394,47 +452,73 @@ def _search(areas: list[SearchArea], params: VehicleParams) -> list[_AreaSearch]
         np.ceil(params.min_width_m / 2 * px_per_m).astype(int),
         np.floor(params.max_width_m / 2 * px_per_m).astype(int),
     )
-    out = []
-    for t, area in enumerate(areas):
-        a = 2 * sizes[t, 1] - 1  # the area's own axes
-        axes = _best_of_runs(ok[t, :a], k[t, :a], chi_at[t, :a], pairs[t, :, :a])
-        candidates, chosen = _boxes(area, axes, params)
-        out.append(
-            _AreaSearch(edges[t], symmetry[t, :, :a], float(thresholds[t]), candidates, chosen)
+    candidates = _candidates(areas, sizes, axes, params)
+    return [
+        _AreaSearch(
+            edges[t, : sizes[t, 0], : sizes[t, 1]],
+            symmetry[t, :, : 2 * sizes[t, 1] - 1],  # the area's own axes
+            float(thresholds[t]),
+            candidates[t],
+            _most_central(area, candidates[t]),
         )
-    return out
+        for t, area in enumerate(areas)
+    ]
 
 
-def _boxes(
-    area: SearchArea, axes: list[tuple[float, int, float, float]], params: VehicleParams
-) -> tuple[tuple[Candidate, ...], int | None]:
-    """Steps 7-8: the candidates' bottoms, tops and boxes, and the most central one."""
-    if not axes:
-        return (), None
-    patch = area.patch
-    w = patch.shape[1]
-    d_down: npt.NDArray[np.int16] = np.asarray(cv2.Sobel(patch, cv2.CV_16S, 0, 1, ksize=3))
-    candidates = []
-    for axis, half, chi, half_px in axes:
-        centre = axis + 0.5  # in pixel-edge columns: pixel c spans c .. c + 1
-        col0, col1 = max(0, round(centre - half_px)), min(w, round(centre + half_px))
-        bottom = find_bottom(d_down, col0, col1, params)
-        top = None if bottom is None else find_top(d_down, col0, col1, bottom, params)
-        box = None
-        if bottom is not None:
-            (u0, u1), (vb,) = area.to_image_px([centre - half_px, centre + half_px], [bottom])
-            if top is None:
-                vt = vb - params.default_height_ratio * (u1 - u0)
-            else:
-                vt = float(area.to_image_px([0.0], [top])[1][0])
-            box = (float(u0), float(vt), float(u1), float(vb))
-        candidates.append(Candidate(axis, half, half_px, chi, bottom, top, box))
+def _candidates(
+    areas: list[SearchArea], sizes: npt.NDArray[np.int_], axes: _Axes, params: VehicleParams
+) -> list[tuple[Candidate, ...]]:
+    """Step 7: each area's candidates with their bottoms, tops and boxes in the image."""
+    found: list[list[Candidate]] = [[] for _ in areas]
+    if len(axes.area) == 0:
+        return [()] * len(areas)
+    with_axes, stacked = np.unique(axes.area, return_inverse=True)
+    d_down = _sobel_stack([areas[t].patch for t in with_axes.tolist()], 0, 1)
+    h, w = sizes[axes.area].T
+    centre = axes.axis / 2 + 0.5  # in pixel-edge columns: pixel c spans c .. c + 1
+    col0 = np.maximum(0, np.round(centre - axes.half_px)).astype(np.intp)
+    col1 = np.minimum(w, np.round(centre + axes.half_px)).astype(np.intp)
+    bottom, top = _box_rows(d_down, stacked, col0, col1, params)
+    # patch pixel edges -> image pixels (`SearchArea.to_image_px`)
+    c0, r0, c1, r1 = np.array([a.box_px for a in areas], dtype=np.float64)[axes.area].T
+    u0 = c0 - 0.5 + (centre - axes.half_px) * (c1 - c0) / w
+    u1 = c0 - 0.5 + (centre + axes.half_px) * (c1 - c0) / w
+    vb = r0 - 0.5 + bottom * (r1 - r0) / h
+    vt = np.where(
+        top >= 0, r0 - 0.5 + top * (r1 - r0) / h, vb - params.default_height_ratio * (u1 - u0)
+    )
+    columns = zip(
+        axes.area.tolist(),
+        (axes.axis / 2).tolist(),
+        (axes.row + 1).tolist(),
+        axes.half_px.tolist(),
+        axes.chi.tolist(),
+        bottom.tolist(),
+        top.tolist(),
+        np.stack([u0, vt, u1, vb], axis=1).tolist(),
+        strict=True,
+    )
+    for t, axis, half, half_px, chi, b, tp, box in columns:
+        found[t].append(
+            Candidate(
+                axis,
+                half,
+                half_px,
+                chi,
+                None if b < 0 else b,
+                None if tp < 0 else tp,
+                None if b < 0 else tuple(box),
+            )
+        )
+    return [tuple(c) for c in found]
+
+
+def _most_central(area: SearchArea, candidates: tuple[Candidate, ...]) -> int | None:
+    """Step 8: the candidate with a box whose axis is nearest the radar point's column."""
+    w = area.patch.shape[1]
     centre_col = (area.base_px[0] - area.box_px[0] + 0.5) * w / (area.box_px[2] - area.box_px[0])
     with_box = [i for i, c in enumerate(candidates) if c.box_px is not None]
-    chosen = min(
-        with_box, key=lambda i: abs(candidates[i].axis_px + 0.5 - centre_col), default=None
-    )
-    return tuple(candidates), chosen
+    return min(with_box, key=lambda i: abs(candidates[i].axis_px + 0.5 - centre_col), default=None)
 
 
 # --- steps 9-10 ------------------------------------------------------------------------------
