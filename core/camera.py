@@ -328,7 +328,7 @@ class CameraModel:
         in_front = pc[:, 2] > 0
         z = np.where(in_front, pc[:, 2], np.nan)
         i = self.intrinsics
-        uv = np.stack([i.fx_px * pc[:, 0] / z + i.cx_px, i.fy_px * pc[:, 1] / z + i.cy_px], axis=1)
+        uv = pc[:, :2] / z[:, None] * (i.fx_px, i.fy_px) + (i.cx_px, i.cy_px)
         if i.distortion and in_front.any():
             uv[in_front] = self.distort_px(uv[in_front])
         return uv, in_front
@@ -337,9 +337,8 @@ class CameraModel:
         """(N, 2) pixels -> (N, 3) unit ray directions in the vehicle frame."""
         p = self.undistort_px(pts_img_px)
         i = self.intrinsics
-        d_cam = np.stack(
-            [(p[:, 0] - i.cx_px) / i.fx_px, (p[:, 1] - i.cy_px) / i.fy_px, np.ones(len(p))], axis=1
-        )
+        d_cam = np.ones((len(p), 3))
+        d_cam[:, :2] = (p - (i.cx_px, i.cy_px)) / (i.fx_px, i.fy_px)
         d = d_cam @ self.R_vehicle_camera.T
         return d / np.sqrt((d * d).sum(axis=1, keepdims=True))
 

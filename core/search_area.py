@@ -123,19 +123,19 @@ def search_areas(
         [(t.x_m, y, 0.0) for t in radar for y in (t.y_m, t.y_m + half_m, t.y_m - half_m)]
     )
     uv, in_front = camera.project(pts)
-    uv = uv.reshape(len(radar), 3, 2)
-    visible = np.all(in_front.reshape(len(radar), 3), axis=1)
+    points = uv.reshape(len(radar), 3, 2).tolist()
+    visible = np.all(in_front.reshape(len(radar), 3), axis=1).tolist()
     areas = []
     for i, t in enumerate(radar):
-        (u, v), (u_left, _), (u_right, _) = uv[i]
+        (u, v), (u_left, _), (u_right, _) = points[i]
         if not (visible[i] and -0.5 <= u < w_img - 0.5 and -0.5 <= v < h_img - 0.5):
             continue
-        width_px = float(u_right - u_left)
+        width_px = u_right - u_left
         if not width_px > 0:
             continue
         height_px = params.search_height_ratio * width_px
-        v1 = float(v) + params.search_bottom_fraction * height_px
-        full = (float(u_left), v1 - height_px, float(u_right), v1)
+        v1 = v + params.search_bottom_fraction * height_px
+        full = (u_left, v1 - height_px, u_right, v1)
         c0, r0 = max(0, math.ceil(full[0])), max(0, math.ceil(full[1]))
         c1, r1 = min(w_img, math.ceil(full[2])), min(h_img, math.ceil(full[3]))
         if c1 - c0 < 2 or r1 - r0 < 2:
@@ -152,7 +152,7 @@ def search_areas(
             SearchArea(
                 target_index=i,
                 target=t,
-                base_px=(float(u), float(v)),
+                base_px=(u, v),
                 full_px=full,
                 box_px=(c0, r0, c1, r1),
                 y_left_m=t.y_m + half_m,
