@@ -28,8 +28,9 @@ guard rail, the others for a right one. Steps, each visible in `GuardRailCheck`:
    without a search, until the first that is not covered enough, where the search resumes.
    `manage_overlaps` False searches every slow area.
 
-A right rail is the mirror image of a left one: its patch is flipped left-right, steps 1-5
-run as for a left rail, and the edges, start, line and holes are flipped back. `rail_edges`
+A right rail is the mirror image of a left one: steps 1-5 give the left-rail results of the
+patch flipped left-right, flipped back (step 1 keeps the mirrored orientation, steps 3-5
+read the edges from the right). `rail_edges`
 (steps 1-2), `find_start` (3), `follow_line` (4-5) and `search_line` (3-5) can be called on
 their own; the last three work on the left-rail orientation.
 
@@ -73,6 +74,11 @@ Notes:
       of a chain is compared with the last one labelled, so a chain can follow a rail
       beyond the first area, as the rows of boxes along a rail in fig. 8. `overlapped_by`
       names that last labelled area. Areas at equal distance keep their radar order.
+    - numba: steps 1-5 written as OpenCV calls (Sobel, erode, dilate), numpy masks and a
+      Python loop over padded bytes took 55 us per area (mostly 32x64, one thread); these
+      loops take 6 us (`fusionscope bench --stage guardrail`). Step 1 stays in float32, as
+      OpenCV's CV_32F derivatives, so the module and angle tests round the same. The first
+      call compiles (about 7 s) and caches the machine code next to this file.
 """
 
 from __future__ import annotations
@@ -80,7 +86,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import cv2
+import numba
 import numpy as np
 import numpy.typing as npt
 
@@ -117,16 +123,15 @@ START_OFFSETS = (
 )
 # Paper 002: the neighbourhood moves "by three pixels down at a time" (its own height).
 START_STEP_PX = 3
-# Fig. 5: right, up-right, down-right, up, down (left rail); the order of `_follow`'s tests.
+# Fig. 5: right, up-right, down-right, up, down (left rail), in the order `_follow` tests them.
 FOLLOW_OFFSETS = ((0, 1), (-1, 1), (1, 1), (-1, 0), (1, 0))
 WHITE = 255
 
-# The edge image is searched as flat bytes padded with black: one row above and below, and
-# on the right as many columns as fig. 3 reaches, so no neighbour test needs a bounds check.
-_PAD_RIGHT_PX = max(dc for _, dc in START_OFFSETS)
-
 EdgeImage = npt.NDArray[np.uint8]
 PixelArray = npt.NDArray[np.int32]
+F32Array = npt.NDArray[np.float32]
+
+_jit = numba.njit(cache=True, nogil=True)
 
 
 @dataclass(frozen=True, eq=False)
@@ -223,25 +228,107 @@ def is_slow(target: RadarTarget, ego_speed_mps: float, params: GuardRailParams) 
 # --- steps 1-2: edges -------------------------------------------------------------------------
 
 
-def _mirror(image: npt.NDArray[np.uint8]) -> npt.NDArray[np.uint8]:
-    """The image flipped left-right (a right rail seen as a left one, and back)."""
-    return np.asarray(cv2.flip(image, 1), dtype=np.uint8)
+@_jit
+def _replicated(patch: npt.NDArray[np.uint8]) -> F32Array:
+    """`patch` in float32 with a one-pixel border repeating its outer rows and columns, as
+    OpenCV's BORDER_REPLICATE."""
+    h, w = patch.shape
+    out = np.empty((h + 2, w + 2), dtype=np.float32)
+    for r in range(h + 2):
+        src, dst = patch[min(max(r - 1, 0), h - 1)], out[r]
+        dst[0] = src[0]
+        for c in range(w):
+            dst[c + 1] = src[c]
+        dst[w + 1] = src[w - 1]
+    return out
 
 
-def _left_edges(patch: npt.NDArray[np.uint8], params: GuardRailParams) -> EdgeImage:
-    """Steps 1-2 for a left rail: (h, w) uint8 0/255."""
-    # Replicated border: the default reflection zeroes d/dcol on the first and last column.
-    gx = cv2.Sobel(patch, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
-    gy = cv2.Sobel(patch, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
+@_jit
+def _oriented(
+    patch: npt.NDArray[np.uint8],
+    left: bool,
+    tan_min: float,
+    tan_max: float,
+    threshold_sq: float,
+) -> EdgeImage:
+    """Step 1: (h, w) uint8, WHITE where the 3x3 Sobel gradient has a `left` (else right)
+    rail's orientation, tan_min <= |d/dcol| / |d/drow| <= tan_max, and a squared module
+    above threshold_sq. In float32, as OpenCV's CV_32F derivatives (whole numbers, exact):
+    the three bounds are rounded to float32 and compared with float32 products."""
+    h, w = patch.shape
+    p = _replicated(patch)
+    t_min, t_max, module_sq = np.float32(tan_min), np.float32(tan_max), np.float32(threshold_sq)
     # A line rising to the right at angle a from the horizontal has its gradient along
-    # +-(sin a, cos a) in (col, row): same signs, |gx| / |gy| = tan a.
-    ax, ay = np.abs(gx), np.abs(gy)
-    keep = (gx * gy >= 0) & (ax >= math.tan(params.min_angle_rad) * ay)
-    keep &= ax <= math.tan(params.max_angle_rad) * ay
-    keep &= gx * gx + gy * gy > params.sobel_threshold**2
-    binary = keep.view(np.uint8) * np.uint8(WHITE)
-    eroded = cv2.erode(binary, EROSION_KERNEL)
-    return np.asarray(cv2.dilate(eroded, DILATION_KERNEL), dtype=np.uint8)
+    # +-(sin a, cos a) in (col, row): same signs, |gx| / |gy| = tan a; rising to the left
+    # (a right rail), opposite signs.
+    sign, two = np.float32(1 if left else -1), np.float32(2)
+    out = np.empty((h, w), dtype=np.uint8)
+    for r in range(h):
+        up, mid, down, dst = p[r], p[r + 1], p[r + 2], out[r]
+        for c in range(w):  # column c + 1 of p's rows
+            gx = up[c + 2] - up[c] + two * (mid[c + 2] - mid[c]) + down[c + 2] - down[c]
+            gy = down[c] - up[c] + two * (down[c + 1] - up[c + 1]) + down[c + 2] - up[c + 2]
+            ax, ay = abs(gx), abs(gy)
+            keep = (
+                (sign * gx * gy >= 0)
+                & (ax >= t_min * ay)
+                & (ax <= t_max * ay)
+                & (gx * gx + gy * gy > module_sq)
+            )
+            dst[c] = WHITE if keep else 0
+    return out
+
+
+@_jit
+def _morphology(image: EdgeImage, kernel: EdgeImage, dilate: bool) -> EdgeImage:
+    """OpenCV's erosion (min) or dilation (`dilate`: max) of `image` by `kernel` (odd sides,
+    anchored at its centre) with its default border: cells outside the image are left out,
+    so the image border is not eroded."""
+    h, w = image.shape
+    kh, kw = kernel.shape
+    reach_rows, reach_cols = kh // 2, kw // 2
+    # Flat rows of `width` cells, pixel (r, c) at first + r * width + c; the 2 reach_cols
+    # cells ending each row and the `first` cells before and after the rows are neutral, so
+    # each kernel cell is one shifted read for every pixel, in the buffer.
+    width = w + 2 * reach_cols
+    first = reach_rows * width + 2 * reach_cols
+    n = h * width
+    padded = np.full(n + 2 * first, 0 if dilate else WHITE, dtype=np.uint8)
+    for r in range(h):
+        src, dst = image[r], padded[first + r * width :]
+        for c in range(w):
+            dst[c] = src[c]
+    out = padded[first : first + n].copy()
+    for i in range(kh):
+        for j in range(kw):
+            if not kernel[i, j]:
+                continue
+            src = padded[first + (i - reach_rows) * width + j - reach_cols :]
+            if dilate:
+                for k in range(n):
+                    out[k] = max(out[k], src[k])
+            else:
+                for k in range(n):
+                    out[k] = min(out[k], src[k])
+    return out.reshape((h, width))[:, :w].copy()
+
+
+@_jit
+def _rail_edges(
+    patch: npt.NDArray[np.uint8],
+    left: bool,
+    tan_min: float,
+    tan_max: float,
+    threshold_sq: float,
+) -> EdgeImage:
+    """Steps 1-2 (see `_oriented`)."""
+    binary = _oriented(patch, left, tan_min, tan_max, threshold_sq)
+    return _morphology(_morphology(binary, EROSION_KERNEL, False), DILATION_KERNEL, True)
+
+
+def _edge_tests(params: GuardRailParams) -> tuple[float, float, float]:
+    """`_oriented`'s tan_min, tan_max and threshold_sq."""
+    return math.tan(params.min_angle_rad), math.tan(params.max_angle_rad), params.sobel_threshold**2
 
 
 def rail_edges(patch: npt.NDArray[np.uint8], side: str, params: GuardRailParams) -> EdgeImage:
@@ -250,99 +337,86 @@ def rail_edges(patch: npt.NDArray[np.uint8], side: str, params: GuardRailParams)
     require_grey_image("patch", patch)
     if side not in SIDES:
         raise ValueError(f"side: expected one of {SIDES}, got {side!r}")
-    if side == "left":
-        return _left_edges(patch, params)
-    return _mirror(_left_edges(_mirror(patch), params))
+    return _rail_edges(patch, side == "left", *_edge_tests(params))
 
 
 # --- steps 3-5: start, line following, verdict ------------------------------------------------
 
 
-@dataclass(frozen=True, eq=False)
-class _Padded:
-    """An edge image as flat bytes with black padding (see _PAD_RIGHT_PX): pixel (r, c) at
-    (r + 1) * stride + c."""
-
-    data: bytearray
-    stride: int
-    h: int
-    w: int
-
-    @classmethod
-    def of(cls, edges: EdgeImage) -> _Padded:
-        h, w = edges.shape
-        padded = cv2.copyMakeBorder(edges, 1, 1, 0, _PAD_RIGHT_PX, cv2.BORDER_CONSTANT, value=0)
-        return cls(bytearray(padded.tobytes()), w + _PAD_RIGHT_PX, h, w)
-
-    def pixels(self, flat: list[int]) -> PixelArray:
-        """(N, 2) int32 (row, col) of flat indices."""
-        rows, cols = np.divmod(np.array(flat, dtype=np.int32).reshape(-1), self.stride)
-        return np.stack([rows - 1, cols], axis=1).astype(np.int32)
+@_jit
+def _white(edges: EdgeImage, row: int, col: int) -> bool:
+    """Pixel (row, col) is white; outside the image is black."""
+    h, w = edges.shape
+    return 0 <= row < h and 0 <= col < w and edges[row, col] > 0
 
 
-def _find_start(p: _Padded) -> int | None:
-    """Step 3 on padded edges: flat index of the start pixel, or None."""
-    s = p.stride
-    offsets = [dr * s + dc for dr, dc in START_OFFSETS]
-    data = p.data
-    for row in range(p.h // 2, p.h, START_STEP_PX):
-        anchor = (row + 1) * s
-        for off in offsets:
-            if data[anchor + off]:
-                return anchor + off
-    return None
+@_jit
+def _find_start(edges: EdgeImage) -> tuple[int, int]:
+    """Step 3 on left-rail edges: (row, col) of the start, (-1, -1) when none."""
+    h = edges.shape[0]
+    for row in range(h // 2, h, START_STEP_PX):
+        for dr, dc in START_OFFSETS:
+            if _white(edges, row + dr, dc):
+                return row + dr, dc
+    return -1, -1
 
 
-def _follow(p: _Padded, start: int, max_holes: int) -> tuple[list[int], list[int]]:
-    """Step 4 on padded edges from the flat index `start`: the followed and the hole
-    indices. Visited pixels are blackened in p.data."""
-    data, s = p.data, p.stride
-    right, up_right, down_right, up, down = (dr * s + dc for dr, dc in FOLLOW_OFFSETS)
-    col = start % s
-    last_col = p.w - 1
-    i = start
-    data[i] = 0
-    line = [i]
-    holes: list[int] = []
-    while col < last_col:
-        # fig. 5, in FOLLOW_OFFSETS order
-        if data[i + right]:
-            i += right
+@_jit
+def _follow(
+    edges: EdgeImage, row: int, col: int, max_holes: int
+) -> tuple[PixelArray, PixelArray, float]:
+    """Steps 4-5 on left-rail edges from their white pixel (row, col): (line_px, holes_px,
+    coverage)."""
+    h, w = edges.shape
+    unvisited = edges.copy()
+    unvisited[row, col] = 0
+    line = np.empty((h * w, 2), dtype=np.int32)  # pixels are never revisited
+    holes = np.empty((w, 2), dtype=np.int32)  # each hole is one column on
+    line[0, 0], line[0, 1] = row, col
+    n_line, n_holes = 1, 0
+    while col < w - 1:
+        moved = False
+        for dr, dc in FOLLOW_OFFSETS:  # fig. 5, in order
+            if _white(unvisited, row + dr, col + dc):
+                row, col, moved = row + dr, col + dc, True
+                break
+        if not moved:  # a hole: on along the row
             col += 1
-        elif data[i + up_right]:
-            i += up_right
-            col += 1
-        elif data[i + down_right]:
-            i += down_right
-            col += 1
-        elif data[i + up]:
-            i += up
-        elif data[i + down]:
-            i += down
-        else:  # a hole: on along the row
-            i += right
-            col += 1
-            holes.append(i)
-            if len(holes) > max_holes:
+            holes[n_holes, 0], holes[n_holes, 1] = row, col
+            n_holes += 1
+            if n_holes > max_holes:
                 break
             continue
-        data[i] = 0
-        line.append(i)
-    return line, holes
+        unvisited[row, col] = 0
+        line[n_line, 0], line[n_line, 1] = row, col
+        n_line += 1
+    coverage = (line[n_line - 1, 1] - line[0, 1] + 1) / w
+    return line[:n_line].copy(), holes[:n_holes].copy(), coverage
 
 
-_NO_PIXELS = np.zeros((0, 2), dtype=np.int32)
-_NO_PIXELS.flags.writeable = False
+@_jit
+def _search_line(
+    edges: EdgeImage, left: bool, max_holes: int
+) -> tuple[PixelArray, PixelArray, float]:
+    """Steps 3-5 for a `left` (else right) rail: `_follow` from `_find_start`'s pixel (an
+    empty line of coverage 0 without one). A right rail's edges are searched mirrored and
+    its pixels mapped back to the edges' columns."""
+    w = edges.shape[1]
+    view = edges if left else edges[:, ::-1]
+    row, col = _find_start(view)
+    if row < 0:
+        return np.zeros((0, 2), dtype=np.int32), np.zeros((0, 2), dtype=np.int32), 0.0
+    line_px, holes_px, coverage = _follow(view, row, col, max_holes)
+    if not left:
+        line_px[:, 1] = w - 1 - line_px[:, 1]
+        holes_px[:, 1] = w - 1 - holes_px[:, 1]
+    return line_px, holes_px, coverage
 
 
-def _trace(p: _Padded, start: int | None, params: GuardRailParams) -> LineTrace:
-    """Steps 4-5 from the flat index `start` (None: no start, an empty trace)."""
-    if start is None:
-        return LineTrace(_NO_PIXELS, _NO_PIXELS, 0.0, False)
-    line, holes = _follow(p, start, params.max_holes)
-    line_px = p.pixels(line)
-    coverage = (int(line_px[:, 1].max()) - int(line_px[0, 1]) + 1) / p.w
-    return LineTrace(line_px, p.pixels(holes), coverage, coverage > params.min_length_fraction)
+def _trace(found: tuple[PixelArray, PixelArray, float], params: GuardRailParams) -> LineTrace:
+    """The LineTrace of `_follow`'s or `_search_line`'s result."""
+    line_px, holes_px, coverage = found
+    return LineTrace(line_px, holes_px, coverage, coverage > params.min_length_fraction)
 
 
 def find_start(edges: EdgeImage) -> tuple[int, int] | None:
@@ -350,9 +424,8 @@ def find_start(edges: EdgeImage) -> tuple[int, int] | None:
     white pixel of fig. 3's neighbourhood anchored at column 0, from row h // 2 down in
     steps of 3 rows; None when area A holds none."""
     require_grey_image("edges", edges)
-    p = _Padded.of(edges)
-    start = _find_start(p)
-    return None if start is None else (start // p.stride - 1, start % p.stride)
+    row, col = _find_start(edges)
+    return None if row < 0 else (row, col)
 
 
 def follow_line(edges: EdgeImage, start: tuple[int, int], params: GuardRailParams) -> LineTrace:
@@ -363,41 +436,49 @@ def follow_line(edges: EdgeImage, start: tuple[int, int], params: GuardRailParam
     r, c = start
     if not (0 <= r < h and 0 <= c < w) or not edges[r, c]:
         raise ValueError(f"start: expected a white pixel (row, col) of the edges, got {start}")
-    p = _Padded.of(edges)
-    return _trace(p, (r + 1) * p.stride + c, params)
+    return _trace(_follow(edges, r, c, params.max_holes), params)
 
 
 def search_line(edges: EdgeImage, params: GuardRailParams) -> LineTrace:
     """Steps 3-5 on a left-rail edge image (h, w) uint8 (white: > 0): `follow_line` from
     `find_start`'s pixel; an empty trace, not a guard rail, when there is none."""
     require_grey_image("edges", edges)
-    p = _Padded.of(edges)
-    return _trace(p, _find_start(p), params)
+    return _trace(_search_line(edges, True, params.max_holes), params)
 
 
 # --- the stage --------------------------------------------------------------------------------
 
 _NOT_SEARCHED = np.zeros((0, 0), dtype=np.uint8)
 _NOT_SEARCHED.flags.writeable = False
+_NO_PIXELS = np.zeros((0, 2), dtype=np.int32)
+_NO_PIXELS.flags.writeable = False
 
 
 def _side(target: RadarTarget) -> str:
     return "left" if target.y_m > 0 else "right"
 
 
+@_jit
+def _search_area(
+    patch: npt.NDArray[np.uint8],
+    left: bool,
+    tan_min: float,
+    tan_max: float,
+    threshold_sq: float,
+    max_holes: int,
+) -> tuple[EdgeImage, PixelArray, PixelArray, float]:
+    """Steps 1-5 on a patch: (edges, line_px, holes_px, coverage)."""
+    edges = _rail_edges(patch, left, tan_min, tan_max, threshold_sq)
+    line_px, holes_px, coverage = _search_line(edges, left, max_holes)
+    return edges, line_px, holes_px, coverage
+
+
 def _search(area: SearchArea, speed_mps: float, params: GuardRailParams) -> GuardRailCheck:
-    """Steps 1-5 on one area; a right rail's patch is mirrored and the results mapped back."""
+    """Steps 1-5 on one area."""
     side = _side(area.target)
-    left = side == "left"
-    edges = _left_edges(area.patch if left else _mirror(area.patch), params)
-    p = _Padded.of(edges)
-    trace = _trace(p, _find_start(p), params)
-    line_px, holes_px = trace.line_px, trace.holes_px
-    if not left:
-        edges = _mirror(edges)
-        line_px, holes_px = line_px.copy(), holes_px.copy()
-        line_px[:, 1] = p.w - 1 - line_px[:, 1]
-        holes_px[:, 1] = p.w - 1 - holes_px[:, 1]
+    edges, line_px, holes_px, coverage = _search_area(
+        area.patch, side == "left", *_edge_tests(params), params.max_holes
+    )
     return GuardRailCheck(
         target_index=area.target_index,
         side=side,
@@ -405,8 +486,8 @@ def _search(area: SearchArea, speed_mps: float, params: GuardRailParams) -> Guar
         edges=edges,
         line_px=line_px,
         holes_px=holes_px,
-        coverage=trace.coverage,
-        verdict="guard_rail" if trace.guard_rail else "not_guard_rail",
+        coverage=coverage,
+        verdict="guard_rail" if coverage > params.min_length_fraction else "not_guard_rail",
         overlapped_by=None,
     )
 

@@ -23,6 +23,10 @@ Notes:
     - The paper does not say how the area's height relates to pixels and metres; here the
       height is `search_height_ratio` times the area's image width, which is the same
       fraction of its world width for square pixels (fx = fy).
+    - Step 4 resamples bilinearly (OpenCV's INTER_LINEAR), not by pixel-area averaging:
+      INTER_AREA cost 12 to 35 us per area (a third of the vehicle detector's budget for 8
+      targets), and the refined shares of the bundled drives' vehicles stayed the same
+      (highway 44 of 53 both ways).
 """
 
 from __future__ import annotations

@@ -1,40 +1,22 @@
-"""Vertical symmetry of edges in one search area (paper 001 section II, steps 4-8), compiled
-with numba.
+"""Vertical symmetry of edges in one search area: steps 4-8 of the vehicle detector (paper
+001 section II), compiled with numba.
 
-Steps, on one resampled area (`core.search_area.SearchArea.patch`):
-
-4. binarised vertical edges with their sign: horizontal 3x3 Sobel derivative (borders
-   reflected as OpenCV's default), +1 where it exceeds the edge threshold (darker to
-   brighter, left to right), -1 where it is below minus the threshold;
-5. the symmetry matrix: for every axis (every column, and every border between two
-   columns) and every half-width k from 1 to K, the window is k pixels either side of the
-   axis over the whole area height; s counts the pairs of edges mirrored about the axis
-   within the window (same row) whose signs are opposite, n all edges in the window,
-   chi = s^2 / n (0 when n = 0). Rows of the matrix are half-widths 1 .. K, columns axes
-   at half-column steps: column a is the axis at column a / 2, and half-width k pairs the
-   columns (a - d) / 2 and (a + d) / 2, d = 2 k on whole axes and 2 k - 1 on half ones;
-6. candidate axes: chi stays below the threshold for half-widths below the narrow limit
-   and reaches it at the vehicle's half-width, the one between the vehicle limits with the
-   most mirrored pairs (summed with its two neighbours: a border's Sobel edge is two or
-   three pixels wide); its sub-pixel half-width is the mean distance of those pairs, the
-   border's position. One axis per run of neighbouring candidate axes, the one with the
-   highest chi;
-7. each candidate's bottom: the lowest pixel-edge row between a darker row above and a
-   brighter row below (vertical Sobel) across a share of its columns; its top: the highest
-   row at least a height ratio x width above the bottom with horizontal edges of either
-   sign across a share of its columns, else none;
-8. the most central candidate with a bottom: its axis nearest the radar point's column.
-
-`search` does all of it for one area; the other functions are its steps, exposed for the
-tests and the inspector. `core.vehicle` holds the parameters' meaning and the paper's
-departures.
+`search` runs them on one resampled area (`core.search_area.SearchArea.patch`): signed
+vertical edges, the symmetry matrix chi = s^2 / n (rows half-widths 1 .. K, columns axes at
+half-column steps: column a is the axis at column a / 2, and half-width k pairs the columns
+(a - d) / 2 and (a + d) / 2, d = 2 k on whole axes and 2 k - 1 on half ones), the candidate
+axes and widths, each candidate's bottom and top, and the most central candidate with a
+bottom. The other functions are its steps, for the tests and the inspector. `core.vehicle`
+gives the steps in the paper's terms, their parameters and the departures.
 
 Notes:
-    - numba: the same steps written with numpy array operations (batched matrix products,
-      gathers, reductions) took 0.74 ms for a frame of 8 radar targets, most of it the
-      fixed cost of a hundred small array operations; these loops take a fraction of that
-      (`fusionscope bench --stage vehicle`). Edge columns are bit-packed, so a mirrored pair
-      count is a popcount of two ANDs.
+    - numba: the same steps written as numpy array operations (batched matrix products,
+      gathers, reductions over a frame's areas) took 0.74 ms for a frame of 8 radar
+      targets, most of it the fixed cost of a hundred small array operations; these loops
+      take 0.03 ms per area (`fusionscope bench --stage vehicle`: 0.40 ms for the frame,
+      search areas and merging included). Edge columns are bit-packed, so a count of
+      mirrored pairs is a popcount of two ANDs. The first call compiles (about 10 s) and
+      caches the machine code next to this file for later runs.
 """
 
 from __future__ import annotations
