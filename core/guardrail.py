@@ -23,9 +23,10 @@ guard rail, the others for a right one. Steps, each visible in `GuardRailCheck`:
    on an edge pixel) over the patch width is its coverage; more than
    `min_length_fraction` is a guard rail;
 6. overlapping boxes management (III): the slow targets' areas are processed nearest first
-   (by x_m); after a guard rail, each following area that the last labelled one covers by
-   more than `overlap_fraction` (`core.search_area.overlap_fraction`) is labelled guard rail
-   without a search, until the first that is not covered enough, where the search resumes.
+   (by x_m); after a guard rail is found, each following area that the rail's area covers
+   by more than `overlap_fraction` (`core.search_area.overlap_fraction`) is labelled guard
+   rail without a search, until the first that is not covered enough, where the search
+   resumes.
    `manage_overlaps` False searches every slow area.
 
 A right rail is the mirror image of a left one: steps 1-5 give the left-rail results of the
@@ -70,10 +71,11 @@ Notes:
       only moves right or vertically, so only up and down moves could revisit).
     - Step 5: "longer than 50% of the searching area" is read as the horizontal extent, in
       columns, over the patch width (a guard rail crosses the area from side to side).
-    - Step 6: the paper compares "the following area" with the labelled one; here each area
-      of a chain is compared with the last one labelled, so a chain can follow a rail
-      beyond the first area, as the rows of boxes along a rail in fig. 8. `overlapped_by`
-      names that last labelled area. Areas at equal distance keep their radar order.
+    - Step 6: each following area is compared with the area where the rail was found, as
+      the paper says. Comparing it with the last one labelled instead, so that a chain
+      could follow a rail beyond the first area, labelled 196 rather than 195 slow targets
+      of the bundled highway drive but also 6 rather than 4 parked cars in line with the
+      rail in `exurban`. Areas at equal distance keep their radar order.
     - numba: steps 1-5 written as OpenCV calls (Sobel, erode, dilate), numpy masks and a
       Python loop over padded bytes took 55 us per area (mostly 32x64, one thread); these
       loops take 6 us (`fusionscope bench --stage guardrail`). Step 1 stays in float32, as
@@ -531,9 +533,8 @@ def detect_guard_rails(
         k += 1
         if check.verdict != "guard_rail" or not params.manage_overlaps:
             continue
-        # 6. the following areas covered by the last labelled one are guard rail too
-        last = area
-        while k < len(slow) and overlap_fraction(last, slow[k][0]) > params.overlap_fraction:
+        # 6. the following areas that the rail's area covers are guard rail too
+        while k < len(slow) and overlap_fraction(area, slow[k][0]) > params.overlap_fraction:
             following, speed = slow[k]
             checks.append(
                 GuardRailCheck(
@@ -545,9 +546,8 @@ def detect_guard_rails(
                     holes_px=_NO_PIXELS,
                     coverage=0.0,
                     verdict="overlap",
-                    overlapped_by=last.target_index,
+                    overlapped_by=area.target_index,
                 )
             )
-            last = following
             k += 1
     return GuardRailResult(tuple(checks))

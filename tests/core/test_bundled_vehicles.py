@@ -150,15 +150,16 @@ def test_no_highway_vehicle_is_labelled_guard_rail(figures: dict[str, Figures]) 
     assert figures["highway"].rails_on_vehicles == 0
     assert figures["highway"].guard_rails > 0  # and the highway's rails are found
     # today's counts elsewhere, as a regression guard (see the strict xfail below)
-    assert figures["exurban"].rails_on_vehicles <= 6
-    assert figures["stop_and_go"].rails_on_vehicles <= 4
+    assert figures["exurban"].rails_on_vehicles <= 4
+    assert figures["stop_and_go"].rails_on_vehicles <= 2
 
 
 @pytest.mark.xfail(
     strict=True,
-    reason="parked cars beside a rail are labelled through overlap chains or a kerb line "
-    "under them (exurban: 6 targets); a zebra crossing under a stopped car reads as a rail "
-    "and labels the car behind it by overlap (stop_and_go: 4). Paper 002 saw none.",
+    reason="exurban: 4 targets on cars parked in line with the rail, 2 covered by a rail's "
+    "area, 2 whose area the curve's pitch error puts on the road's edge line; stop_and_go: 2 "
+    "stopped cars whose area holds a rail-like line on the road (shadow, zebra) below their "
+    "base. Paper 002 saw none.",
 )
 def test_no_vehicle_is_labelled_guard_rail(figures: dict[str, Figures]) -> None:
     assert all(f.rails_on_vehicles == 0 for f in figures.values())

@@ -338,8 +338,8 @@ def test_tiny_patches_are_searched_without_error() -> None:
 
 
 def chain_areas() -> dict[str, SearchArea]:
-    """A rail area A, two areas B and C overlapping it in a chain (blank: a search would not
-    find a rail), a rail area D elsewhere, and a blank area E that overlaps C but follows D."""
+    """A rail area A, two areas B and C that it covers (blank: a search would not find a
+    rail), a rail area D elsewhere, and a blank area E that overlaps C but follows D."""
     ego = 20.0
     rail = rail_patch(np.random.default_rng(3))
     blank = np.full((H, W), 100, dtype=np.uint8)
@@ -364,8 +364,8 @@ def test_overlapping_areas_are_labelled_after_one_search() -> None:
         "guard_rail",
         "not_guard_rail",
     ]
-    # each area of a chain is labelled by the one before it
-    assert [c.overlapped_by for c in result.checks] == [None, 0, 1, None, None]
+    # labelled by the area where the rail was found
+    assert [c.overlapped_by for c in result.checks] == [None, 0, 0, None, None]
     assert result.searched == 3  # A, then D after the chain broke, then E
     assert result.guard_rail_targets == frozenset({0, 1, 2, 3})
     b = result.checks[1]
