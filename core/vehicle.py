@@ -86,7 +86,6 @@ from core.io.frame import RadarTarget
 from core.params import VehicleParams
 from core.search_area import SearchArea, intersection_area, rect_area
 
-FloatArray = npt.NDArray[np.float64]
 F32Array = npt.NDArray[np.float32]
 I8Array = npt.NDArray[np.int8]
 

@@ -22,6 +22,7 @@ from core.symmetry import (
     chi_matrix,
     mirrored_pairs,
     signed_vertical_edges,
+    sobel,
     symmetry_matrix,
 )
 from core.synth.scene import Trajectory, Vehicle
@@ -175,6 +176,28 @@ def test_a_pole_is_bright_at_narrow_widths_and_no_vehicle() -> None:
     chi = chi_matrix(pairs, n)
     assert chi[1, 64] >= 0.35 * 32  # the pole's own axis (32) is bright from the start
     assert 64 not in candidate_axes(chi, pairs, 0.35 * 32, 3, 10, 32)[:, AXIS]  # a = 2 x 32
+
+
+@pytest.mark.parametrize("shape", [(1, 5), (5, 1), (2, 2), (32, 64), (70, 9)])
+def test_compiled_sobel_matches_opencv(shape: tuple[int, int]) -> None:
+    patch = np.random.default_rng(shape[0] * 100 + shape[1]).integers(0, 256, shape, np.uint8)
+    for dx in (1, 0):
+        expected = cv2.Sobel(patch, cv2.CV_16S, dx, 1 - dx, ksize=3)
+        np.testing.assert_array_equal(sobel(patch, dx), expected)
+
+
+def test_mirrored_pairs_match_a_direct_count_over_more_than_64_rows() -> None:
+    """Edge columns are bit-packed 64 rows to a word: 70 rows take two."""
+    edges = np.random.default_rng(5).choice(np.array([-1, 0, 0, 1], np.int8), size=(70, 12))
+    pairs, n = mirrored_pairs(edges, 6)
+    for k in range(1, 7):
+        for a in range(23):
+            d = 2 * k - a % 2
+            left, right = (a - d) // 2, (a + d) // 2
+            inside = left >= 0 and right < 12
+            opposite = int(np.sum(edges[:, left] * edges[:, right] < 0)) if inside else 0
+            assert pairs[k - 1, a] == opposite
+            assert n[k - 1, a] == np.count_nonzero(edges[:, max(left, 0) : right + 1])
 
 
 def test_symmetry_matrix_rejects_a_non_image() -> None:
