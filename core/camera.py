@@ -351,7 +351,7 @@ class CameraModel:
         d = self.rays_vehicle(pts_img_px)
         c = self.position_vehicle_m
         z = np.broadcast_to(np.asarray(z_m, dtype=np.float64), (len(d),))
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", over="ignore", invalid="ignore"):  # t: see ok
             t = (z - c[2]) / d[:, 2]
         ok = np.isfinite(t) & (t > 0) & (np.abs(d[:, 2]) > MIN_RAY_DESCENT)
         out = c[None, :] + np.where(ok, t, 0.0)[:, None] * d
