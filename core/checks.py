@@ -15,9 +15,13 @@ def require_finite(name: str, value: float) -> None:
 
 def require_grey_image(name: str, image: object) -> None:
     """ValueError naming `name` unless `image` is an (H, W) uint8 numpy array."""
-    if not isinstance(image, np.ndarray):
-        raise ValueError(f"{name}: expected an (H, W) uint8 grey image, got {type(image).__name__}")
-    if image.dtype != np.uint8 or image.ndim != 2:
-        raise ValueError(
-            f"{name}: expected an (H, W) uint8 grey image, got {image.dtype} {image.shape}"
-        )
+    require_2d_array(name, image, np.uint8, "uint8 grey image")
+
+
+def require_2d_array(name: str, array: object, dtype: type[np.generic], what: str) -> None:
+    """ValueError naming `name` unless `array` is an (H, W) numpy array of `dtype`; `what`
+    names the expected kind in the message ("int8 edge image")."""
+    if not isinstance(array, np.ndarray):
+        raise ValueError(f"{name}: expected an (H, W) {what}, got {type(array).__name__}")
+    if array.dtype != dtype or array.ndim != 2:
+        raise ValueError(f"{name}: expected an (H, W) {what}, got {array.dtype} {array.shape}")

@@ -27,6 +27,8 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
+from core.checks import require_2d_array, require_grey_image
+
 I8Array = npt.NDArray[np.int8]
 I16Array = npt.NDArray[np.int16]
 I32Array = npt.NDArray[np.int32]
@@ -81,20 +83,14 @@ def sobel(patch: npt.NDArray[np.uint8], dx: int) -> I16Array:
 
 def signed_vertical_edges(patch: npt.NDArray[np.uint8], threshold: float) -> I8Array:
     """Step 4: (h, w) uint8 -> (h, w) int8 binarised vertical edges with their sign."""
-    _require_image("patch", patch, np.uint8)
+    require_grey_image("patch", patch)
     return signed_edges(sobel(patch, 1), float(threshold))
 
 
 def symmetry_matrix(edges: I8Array, max_half_width_px: int) -> F32Array:
     """Step 5: (h, w) int8 signed edges -> (max_half_width_px, 2 w - 1) float32 chi."""
-    _require_image("edges", edges, np.int8)
+    require_2d_array("edges", edges, np.int8, "int8 edge image")
     return chi_matrix(*mirrored_pairs(edges, max_half_width_px))
-
-
-def _require_image(name: str, array: object, dtype: type[np.generic]) -> None:
-    if not (isinstance(array, np.ndarray) and array.ndim == 2 and array.dtype == dtype):
-        got = f"{array.dtype} {array.shape}" if isinstance(array, np.ndarray) else type(array)
-        raise ValueError(f"{name}: expected an (h, w) {np.dtype(dtype)} array, got {got}")
 
 
 @_jit
