@@ -72,6 +72,7 @@ Notes:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -147,7 +148,7 @@ class TargetResult:
 
     @property
     def box_px(self) -> Box | None:
-        return _chosen_box(self.candidates, self.chosen)
+        return None if self.chosen is None else self.candidates[self.chosen].box_px
 
 
 @dataclass(frozen=True)
@@ -173,25 +174,9 @@ class VehicleResult:
 # --- steps 4-8 ------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True, eq=False)
-class _AreaSearch:
-    edges: I8Array
-    symmetry: F32Array
-    threshold: float
-    candidates: tuple[Candidate, ...]
-    chosen: int | None
-
-    @property
-    def box_px(self) -> Box | None:
-        return _chosen_box(self.candidates, self.chosen)
-
-
-def _chosen_box(candidates: tuple[Candidate, ...], chosen: int | None) -> Box | None:
-    return None if chosen is None else candidates[chosen].box_px
-
-
-def _search(area: SearchArea, params: VehicleParams) -> _AreaSearch:
-    """Steps 4-8 on one area (`core.symmetry.search`)."""
+def _search(area: SearchArea, params: VehicleParams) -> TargetResult:
+    """Steps 4-8 on one area (`core.symmetry.search`); the verdict says only whether an
+    axis or a box was found (`detect_vehicles` settles it)."""
     h, w = area.patch.shape
     c0, _, c1, _ = area.box_px
     threshold = params.symmetry_threshold * h
@@ -209,7 +194,18 @@ def _search(area: SearchArea, params: VehicleParams) -> _AreaSearch:
         params.min_height_ratio,
     )
     candidates = _candidates(area, found, params)
-    return _AreaSearch(edges, chi, threshold, candidates, None if chosen < 0 else chosen)
+    return TargetResult(
+        target_index=area.target_index,
+        target=area.target,
+        area=area,
+        edges=edges,
+        symmetry=chi,
+        threshold=threshold,
+        candidates=candidates,
+        chosen=None if chosen < 0 else chosen,
+        verdict="no_bottom" if candidates else "no_symmetry",
+        vehicle_index=None,
+    )
 
 
 def _candidates(
@@ -370,23 +366,8 @@ def detect_vehicles(
             )
             continue
         if i in vehicle_of:
-            verdict = "vehicle"
+            f = dataclasses.replace(f, verdict="vehicle", vehicle_index=vehicle_of[i])
         elif i in chosen:
-            verdict = "size_filter"
-        else:
-            verdict = "no_bottom" if f.candidates else "no_symmetry"
-        results.append(
-            TargetResult(
-                i,
-                target,
-                area,
-                f.edges,
-                f.symmetry,
-                f.threshold,
-                f.candidates,
-                f.chosen,
-                verdict,
-                vehicle_of.get(i),
-            )
-        )
+            f = dataclasses.replace(f, verdict="size_filter")
+        results.append(f)
     return VehicleResult(tuple(results), vehicles)
