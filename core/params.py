@@ -270,19 +270,58 @@ class GuardRailParams:
 
 @dataclass(frozen=True)
 class PedestrianParams:
-    """Symmetry pedestrian detection and its fusion filters (paper 000, II-D)."""
+    """Symmetry pedestrian detection and its fusion filters (paper 000, II-D, after its
+    reference [3], Bertozzi et al. 2000)."""
 
+    # the people searched for (issue 6: 0.9-2.1 m tall, 3-40 m away)
     min_height_m: float = 0.9
     max_height_m: float = 2.1
     min_distance_m: float = 3.0
     max_distance_m: float = 40.0
-    aspect_min: float = 0.2  # width / height of a human box
+    aspect_min: float = 0.2  # width / height of a human box (paper: "a specific aspect ratio")
     aspect_max: float = 0.6
-    symmetry_threshold: float = 0.5
-    min_obstacle_fraction: float = 0.2  # share of a box marked by motion stereo to keep it
+    # each distance band scans a box as tall as a person of this height standing there
+    scan_height_m: float = 1.7
+    distance_step_ratio: float = 1.12  # distance of a band / that of the next nearer one
+    # columns are summed in bins so that a band's box is about this many bins tall: near
+    # bands scan coarser, as far ones (their people are as many bins tall)
+    scan_bins: int = 32
+    # |horizontal Sobel| (3x3) above this is a vertical edge
+    edge_threshold: float = 40.0
+    # a column whose edges cover this share of the box height is a border column; the body's
+    # half-width is the outermost pair of border columns mirrored about the axis
+    border_column_fraction: float = 0.15
+    # edge pixels / box pixels a candidate reaches (paper: "strong presence of edges")
+    min_edge_density: float = 0.04
+    # mean of edge and grey-level symmetry (0..1) a candidate reaches
+    symmetry_threshold: float = 0.6
+    # share of a row's edges with a mirrored partner (of opposite sign, within 1 px) for the
+    # row to be symmetric
+    row_symmetry_fraction: float = 0.5
+    # rows (a share of the band's box height) that end a run: non-symmetric rows end the
+    # body upwards and the symmetric area downwards, rows without edges end the legs (0.08
+    # stopped at the waist of people whose shirt is the background's grey)
+    gap_fraction: float = 0.15
+    max_candidates: int = 24  # candidates reported per frame, strongest first
+    # two refined boxes sharing more than this share of the smaller one frame one person
+    nms_overlap_fraction: float = 0.5
+    # share of a box marked by motion stereo to keep it: on the bundled drives half the
+    # symmetric boxes on a pedestrian reach 0.15-0.2, half of the others stay under 0.1
+    min_obstacle_fraction: float = 0.1
+    # share of a box inside a detected vehicle's box that removes it (paper: "areas detected
+    # where also a vehicle has been detected")
+    vehicle_overlap_fraction: float = 0.5
 
     def __post_init__(self) -> None:
-        _positive(self, "min_height_m", "min_distance_m", "aspect_min", "symmetry_threshold")
+        _positive(
+            self,
+            "min_height_m",
+            "min_distance_m",
+            "aspect_min",
+            "scan_height_m",
+            "edge_threshold",
+            "symmetry_threshold",
+        )
         _check(
             self.max_height_m > self.min_height_m,
             "max_height_m",
@@ -301,16 +340,68 @@ class PedestrianParams:
             f"> aspect_min={self.aspect_min}",
             self.aspect_max,
         )
-        _fraction(self, "min_obstacle_fraction")
+        _check(
+            1.0 < self.distance_step_ratio <= 2.0,
+            "distance_step_ratio",
+            "a ratio in (1, 2]",
+            self.distance_step_ratio,
+        )
+        _check(self.scan_bins >= 8, "scan_bins", "an integer >= 8", self.scan_bins)
+        _check(self.max_candidates >= 1, "max_candidates", "an integer >= 1", self.max_candidates)
+        _fraction(
+            self,
+            "border_column_fraction",
+            "min_edge_density",
+            "row_symmetry_fraction",
+            "gap_fraction",
+            "nms_overlap_fraction",
+            "min_obstacle_fraction",
+            "vehicle_overlap_fraction",
+        )
 
 
 @dataclass(frozen=True)
 class TrackingParams:
-    """Temporal confirmation (beyond the papers: paper 002's "simple time correlation")."""
+    """Temporal confirmation (beyond the papers: paper 002's "simple time correlation").
 
+    The papers give no tracker, so every default here is chosen, not quoted (core/tracking.py).
+    """
+
+    # a track is confirmed after this many frames with a detection (chosen)
     confirm_frames: int = 3
+    # a confirmed track is kept through this many consecutive missed frames (chosen)
     max_missed_frames: int = 3
-    gate_m: float = 2.0
+    # hard cap on the distance between a track's prediction and a detection it may take,
+    # whatever the covariance (chosen: a 30 m/s car seen again 0.1 s after its birth, with
+    # speed 0, is 3 m from its prediction; 2 m lost such tracks on the second frame)
+    gate_m: float = 5.0
+    # gate on the squared Mahalanobis distance of the position innovation (chosen: the 99 %
+    # quantile of a chi-square with 2 degrees of freedom)
+    gate_chi2: float = 9.21
+    # white-acceleration spectral density of the constant-velocity model, per kind (chosen;
+    # guard rails are static ground points, so almost none)
+    vehicle_accel_psd_m2ps3: float = 4.0
+    pedestrian_accel_psd_m2ps3: float = 1.0
+    guard_rail_accel_psd_m2ps3: float = 0.01
+    # measurement noise (chosen): radar distance of vehicles and guard rails, vision lateral
+    # position of vehicles and pedestrians, radar lateral position of guard rails
+    radar_sigma_x_m: float = 0.5
+    vision_sigma_y_m: float = 0.3
+    guard_rail_sigma_y_m: float = 0.5
+    # a pedestrian's distance comes from its foot row: its sigma is this share of the
+    # distance, but not below pedestrian_min_sigma_x_m (chosen)
+    pedestrian_sigma_x_fraction: float = 0.1
+    pedestrian_min_sigma_x_m: float = 0.3
+    # vision width: measurement sigma and random-walk density of the width filter (chosen)
+    width_sigma_m: float = 0.2
+    width_walk_m2ps: float = 0.01
+    # a new track starts with speed 0 and this sigma on each velocity axis (chosen: a 30 m/s
+    # car lies within 2 sigma)
+    initial_velocity_sigma_mps: float = 15.0
+    # position sigma added on each axis when the ego motion of a frame is unknown (chosen)
+    unknown_ego_sigma_m: float = 2.0
+    # filtered positions kept per track, this frame's included (chosen: 3 s at 10 fps)
+    history_length: int = 30
 
     def __post_init__(self) -> None:
         _check(self.confirm_frames >= 1, "confirm_frames", "an integer >= 1", self.confirm_frames)
@@ -320,7 +411,24 @@ class TrackingParams:
             "an integer >= 0",
             self.max_missed_frames,
         )
-        _positive(self, "gate_m")
+        _positive(
+            self,
+            "gate_m",
+            "gate_chi2",
+            "vehicle_accel_psd_m2ps3",
+            "pedestrian_accel_psd_m2ps3",
+            "radar_sigma_x_m",
+            "vision_sigma_y_m",
+            "guard_rail_sigma_y_m",
+            "pedestrian_sigma_x_fraction",
+            "pedestrian_min_sigma_x_m",
+            "width_sigma_m",
+            "initial_velocity_sigma_mps",
+        )
+        for name in ("guard_rail_accel_psd_m2ps3", "width_walk_m2ps", "unknown_ego_sigma_m"):
+            value = getattr(self, name)
+            _check(math.isfinite(value) and value >= 0, name, "a number >= 0", value)
+        _check(self.history_length >= 1, "history_length", "an integer >= 1", self.history_length)
 
 
 @dataclass(frozen=True)

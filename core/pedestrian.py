@@ -1,0 +1,712 @@
+"""Pedestrian detection by vertical symmetry and its fusion filters (paper 000, II-D).
+
+Paper 000 gives the method in words and refers to Bertozzi et al. 2000 ([3]) for it: scan
+the image for vertical symmetry of edges and grey levels and for edge density, keep
+symmetric areas with a human aspect ratio, use the pitch and the road plane to extend the
+box down to the road when the legs break the symmetry, prune by size and perspective, then
+keep only candidates motion stereo also marks as obstacle and drop those inside detected
+vehicles. The steps here:
+
+1. Strip and bands. Distance hypotheses d_k = min_distance_m * distance_step_ratio^k up to
+   max_distance_m. Band k stands a scan_height_m person on the road at d_k: its foot row
+   v_k (where the road at d_k projects, with this frame's pitch) and its box height h_k
+   (pixels). Bands whose foot row falls outside the camera's row window are left out. The
+   strip (the paper's grey strip) covers every band from its tallest person's head
+   (max_height_m) down to its foot row.
+2. Scan. Vertical edges |Sobel_x| > edge_threshold of the strip. For each band, the column
+   profiles of its box (rows v_k - h_k .. v_k): edge pixels and grey sum per column, summed
+   in bins of s_k = max(1, round(h_k / scan_bins)) columns, so every band is scanned at
+   about the same resolution in bins. For each axis (a bin's centre):
+   - the half-width w is the outermost pair of border columns mirrored about the axis
+     (both with edges on more than border_column_fraction of the box height); it must be a
+     human one, aspect_min .. aspect_max times h_k / 2, or the axis scores 0;
+   - edge symmetry S_e = 2 sum_x min(e(j - x), e(j + x)) / sum_x (e(j - x) + e(j + x));
+   - grey symmetry S_g = (sum Even^2 - sum Odd^2) / (sum Even^2 + sum Odd^2) of the mean
+     grey profile less its mean over the window (0 on a flat window);
+   - edge density rho: edge pixels / box pixels in the window, at least min_edge_density;
+   - score = (S_e + max(S_g, 0)) / 2. The symmetry map holds it per band and column.
+3. Candidates: local maxima of the score along a band (within their half-width) that reach
+   symmetry_threshold, strongest first; of band boxes overlapping by more than
+   SAME_PERSON_IOU of their union (one person seen by neighbouring bands) the strongest.
+4. Refinement with the road plane, on the strip's signed edges within the half-width of
+   the axis, from the band's hip row (START_FRACTION h_k above v_k). A row is symmetric
+   when at least two edges lie in it and row_symmetry_fraction of them are mirrored about
+   the axis by an edge of opposite sign (within MIRROR_TOLERANCE_PX); a run of rows ends
+   at gap_fraction h_k rows that break it.
+   - upwards, symmetric rows continue the body: the last is the top. A body still going on
+     at the tallest person's head row has no top (a pole, a tree trunk, the edge of
+     something behind): verdict "no_top";
+   - downwards, symmetric rows continue the symmetric area, rows holding any edge the legs
+     (down to FEET_BELOW_FRACTION h_k under v_k). When the symmetric area ends above the
+     band's road row, the legs broke the symmetry and the box is extended down to the
+     road (`extended`): to the feet, or to the band's road row when the legs show no edges;
+   - constraints, where the box's base meets the road: it stands within PERSPECTIVE_BANDS
+     band steps of the band's distance ("perspective": the scan framed part of someone
+     nearer or farther), a person's height ("size"), a human width / height ("aspect").
+5. Fusion, in the paper's order: a box with less than min_obstacle_fraction of its pixels
+   in motion stereo's reprojected obstacle mask is "motion_stereo"; of the rest, one lying
+   more than vehicle_overlap_fraction inside a detected vehicle's box is "vehicle". The
+   others are "pedestrian".
+
+Notes:
+    - Symmetry is measured on the column profiles of a band's box (per-column sums of edge
+      pixels and grey levels), not row by row over the box as in [3]: a band costs
+      O(columns x width) instead of O(columns x width x height), which is what brings the
+      scan of all bands to about a millisecond. The vertical structure comes back in step
+      4, which looks at each row of the candidate.
+    - The human width is read from the border columns (step 2) instead of keeping the
+      window width of highest symmetry: on a plain background symmetry stays as high for
+      every window wider than the person, so its maximum does not fix a width.
+    - Bands scan a person of scan_height_m; shorter or taller people are found in the band
+      whose box best matches and get their real height from step 4. With no edges on the
+      legs the image cannot tell a near person from a taller, farther one: the band decides.
+    - Steps 3-4 go beyond the paper's words (which give no rule for duplicates, the top,
+      or the feet); their constants are named in this module and measured on the bundled
+      drives (tests/core/test_bundled_pipeline.py reports recall and precision).
+    - Candidates are not tracked over frames here; `core.tracking` does (beyond the paper).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numba
+import numpy as np
+import numpy.typing as npt
+
+from core import symmetry
+from core.camera import CameraModel
+from core.checks import require_2d_array
+from core.params import PedestrianParams
+from core.search_area import intersection_area, rect_area
+
+Box = tuple[float, float, float, float]
+F32Array = npt.NDArray[np.float32]
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+U8Array = npt.NDArray[np.uint8]
+
+Verdict = Literal[
+    "pedestrian", "no_top", "perspective", "size", "aspect", "motion_stereo", "vehicle"
+]
+CONSTRAINT_VERDICTS: tuple[Verdict, ...] = ("no_top", "perspective", "size", "aspect")
+
+# Step 4 starts at the hip of a scan_height_m person, which is still the chest of a child
+# of min_height_m (hips lie at about 0.5 of a person's height, shoulders at 0.8).
+START_FRACTION = 0.45
+# A row's mirrored partner may sit this many pixels off (the axis is one bin's centre).
+MIRROR_TOLERANCE_PX = 1
+# Feet are looked for down to this share of the band's box height below its road row: the
+# strongest band for a person is often a farther one, whose box frames the symmetric torso.
+FEET_BELOW_FRACTION = 0.5
+# Step 3: band boxes overlapping by more than this share of their union frame one person
+# (0.5 also merged the band of the right size into a stronger one framing a torso: 11 of 65
+# pedestrians fewer found on the bundled stop_and_go drive).
+SAME_PERSON_IOU = 0.7
+# A box's base may stand this many band steps off its band's distance (step 4).
+PERSPECTIVE_BANDS = 3.0
+
+_jit = numba.njit(cache=True, nogil=True)
+
+
+@dataclass(frozen=True)
+class Bands:
+    """The distance hypotheses of one frame (step 1), each an array (B,).
+
+    distance_m: d_k; foot_row_px: v_k, the full-image row where the road at d_k is (a
+    box's exclusive bottom); height_px: h_k, a scan_height_m person there; px_per_m: image
+    pixels per metre at d_k; bin_px: s_k, columns per bin.
+    """
+
+    distance_m: FloatArray
+    foot_row_px: IntArray
+    height_px: IntArray
+    px_per_m: FloatArray
+    bin_px: IntArray
+
+    def __len__(self) -> int:
+        return len(self.distance_m)
+
+
+@dataclass(frozen=True)
+class PedestrianCandidate:
+    """One symmetric area and what became of it.
+
+    band: its distance hypothesis; axis_px: the symmetry axis column (full image, pixel
+    centres at whole numbers); half_width_px: the border pair's distance from the axis;
+    score, edge_symmetry, grey_symmetry, edge_density: step 2 at that axis; box_px: (u0, v0,
+    u1, v1) the symmetric area, top to where its symmetry ends; extended_box_px: the box
+    with its bottom on the road (= box_px when not extended); extended: the legs broke the
+    symmetry above the road; distance_m, lateral_m: where the extended box's base meets the
+    road (vehicle frame); height_m, width_m: its world size there (NaN with no top);
+    obstacle_fraction: share of the extended box marked by motion stereo (NaN when a
+    constraint rejected it first); verdict: see `Verdict`.
+    """
+
+    band: int
+    axis_px: float
+    half_width_px: float
+    score: float
+    edge_symmetry: float
+    grey_symmetry: float
+    edge_density: float
+    box_px: Box
+    extended_box_px: Box
+    extended: bool
+    distance_m: float
+    lateral_m: float
+    height_m: float
+    width_m: float
+    obstacle_fraction: float
+    verdict: Verdict
+
+
+@dataclass(frozen=True, eq=False)
+class PedestrianResult:
+    """One frame of pedestrian detection with its intermediates.
+
+    strip_rows_px: (first, stop) full-image rows of the search strip; bands: the distance
+    hypotheses; symmetry: (B, W) float32 score of step 2 per band and column (0 where no
+    human-wide symmetric area is centred); half_width_px: (B, W) float32 the border pair's
+    half-width at each axis (0 without one); candidates: every candidate of step 3 with its
+    verdict, strongest first.
+    """
+
+    strip_rows_px: tuple[int, int]
+    bands: Bands
+    symmetry: F32Array
+    half_width_px: F32Array
+    candidates: tuple[PedestrianCandidate, ...]
+
+    def with_verdict(self, *verdicts: Verdict) -> tuple[PedestrianCandidate, ...]:
+        return tuple(c for c in self.candidates if c.verdict in verdicts)
+
+    @property
+    def kept(self) -> tuple[PedestrianCandidate, ...]:
+        return self.with_verdict("pedestrian")
+
+    @property
+    def rejected_by_motion_stereo(self) -> tuple[PedestrianCandidate, ...]:
+        return self.with_verdict("motion_stereo")
+
+    @property
+    def rejected_by_vehicle(self) -> tuple[PedestrianCandidate, ...]:
+        return self.with_verdict("vehicle")
+
+    @property
+    def pruned(self) -> tuple[PedestrianCandidate, ...]:
+        """Candidates the size and perspective constraints removed (step 4)."""
+        return self.with_verdict(*CONSTRAINT_VERDICTS)
+
+
+# --- step 1: strip and bands ----------------------------------------------------------------
+
+
+def bands_for(camera: CameraModel, params: PedestrianParams) -> Bands:
+    """Step 1: the distance bands whose foot row lies inside the camera's row window."""
+    count = math.floor(
+        math.log(params.max_distance_m / params.min_distance_m)
+        / math.log(params.distance_step_ratio)
+    )
+    d = np.asarray(
+        params.min_distance_m * params.distance_step_ratio ** np.arange(count + 1), np.float64
+    )
+    n = len(d)
+    points = np.zeros((2 * n, 3))
+    points[:, 0] = np.tile(d, 2)
+    points[n:, 2] = 1.0  # a metre above the road
+    pixels, in_front = camera.project(points)
+    feet, heads = pixels[:n], pixels[n:]
+    ok_feet, ok_heads = in_front[:n], in_front[n:]
+    px_per_m = feet[:, 1] - heads[:, 1]
+    first, stop = camera.row_window_px
+    with np.errstate(invalid="ignore"):
+        foot = np.round(feet[:, 1])
+        keep = ok_feet & ok_heads & (px_per_m > 0) & (foot > first) & (foot <= stop)
+    height = np.maximum(np.round(params.scan_height_m * px_per_m[keep]), 1).astype(np.int64)
+    return Bands(
+        distance_m=d[keep],
+        foot_row_px=foot[keep].astype(np.int64),
+        height_px=height,
+        px_per_m=px_per_m[keep],
+        bin_px=np.maximum(np.round(height / params.scan_bins), 1).astype(np.int64),
+    )
+
+
+def _strip_rows(camera: CameraModel, bands: Bands, params: PedestrianParams) -> tuple[int, int]:
+    first, stop = camera.row_window_px
+    if len(bands) == 0:
+        return first, first
+    tallest = np.ceil(params.max_height_m * bands.px_per_m * (1 + params.gap_fraction))
+    top = int(np.min(bands.foot_row_px - tallest))
+    bottom = int(np.max(bands.foot_row_px + np.ceil(params.gap_fraction * bands.height_px)))
+    return max(first, top), min(stop, bottom)
+
+
+# --- step 2: the scan -----------------------------------------------------------------------
+
+
+@_jit
+def _prefix_rows(
+    edges: npt.NDArray[np.int8], grey: U8Array, at: IntArray
+) -> tuple[npt.NDArray[np.int32], npt.NDArray[np.int32]]:
+    """Per column, the edge pixels and the grey sum of the strip's rows above each row of
+    `at` (K,) ascending in 0 .. R: (K, W) int32 each. Only the band boxes' first and last
+    rows are kept, not a (R + 1, W) table: less memory to fill and to read back."""
+    rows, width = edges.shape
+    out_e = np.empty((len(at), width), dtype=np.int32)
+    out_g = np.empty((len(at), width), dtype=np.int32)
+    run_e = np.zeros(width, dtype=np.int32)
+    run_g = np.zeros(width, dtype=np.int32)
+    k = 0
+    for r in range(rows + 1):
+        while k < len(at) and at[k] == r:
+            out_e[k] = run_e
+            out_g[k] = run_g
+            k += 1
+        if r == rows or k == len(at):
+            break
+        for c in range(width):
+            run_e[c] += edges[r, c] != 0
+            run_g[c] += grey[r, c]
+    return out_e, out_g
+
+
+@_jit
+def _column_sums(
+    prefix: npt.NDArray[np.int32], k0: int, k1: int, bin_px: int, offset: int, bins: int
+) -> FloatArray:
+    """Sum between prefix rows k0 and k1 per bin of bin_px columns from column `offset`."""
+    out = np.zeros(bins)
+    for j in range(bins):
+        c0 = offset + j * bin_px
+        s = 0
+        for c in range(c0, c0 + bin_px):
+            s += prefix[k1, c] - prefix[k0, c]
+        out[j] = s
+    return out
+
+
+@_jit
+def _scan(
+    edges: npt.NDArray[np.int8],
+    grey: U8Array,
+    row0: IntArray,
+    row1: IntArray,
+    bin_px: IntArray,
+    min_half: IntArray,
+    max_half: IntArray,
+    border_fraction: float,
+    min_density: float,
+) -> tuple[F32Array, F32Array, F32Array, F32Array, F32Array]:
+    """Step 2 on the strip's signed edges (R, W) and grey (R, W): per band b the box rows
+    row0[b] .. row1[b] (strip rows), bins of bin_px[b] columns, human half-widths
+    min_half[b] .. max_half[b] (bins). Returns (B, W) score, half-width (px), S_e, S_g, rho,
+    each bin's values written to all of its columns."""
+    width = edges.shape[1]
+    n_bands = len(row0)
+    at = np.unique(np.concatenate((row0, row1)))
+    cum_e, cum_g = _prefix_rows(edges, grey, at)
+    k0 = np.searchsorted(at, row0)
+    k1 = np.searchsorted(at, row1)
+    score = np.zeros((n_bands, width), dtype=np.float32)
+    half_px = np.zeros((n_bands, width), dtype=np.float32)
+    s_edge = np.zeros((n_bands, width), dtype=np.float32)
+    s_grey = np.zeros((n_bands, width), dtype=np.float32)
+    density = np.zeros((n_bands, width), dtype=np.float32)
+    for b in range(n_bands):
+        s = bin_px[b]
+        bins = width // s
+        offset = (width - bins * s) // 2
+        h = row1[b] - row0[b]
+        e = _column_sums(cum_e, k0[b], k1[b], s, offset, bins)
+        g = _column_sums(cum_g, k0[b], k1[b], s, offset, bins) / (h * s)
+        border = border_fraction * h * s
+        for j in range(bins):
+            reach = min(max_half[b], j, bins - 1 - j)
+            w = 0
+            for x in range(1, reach + 1):
+                if e[j - x] > border and e[j + x] > border:
+                    w = x
+            if w == 0 or w < min_half[b]:
+                continue
+            pairs = 0.0
+            total = e[j]
+            even = 0.0
+            even2 = 0.0
+            odd2 = 0.0
+            for x in range(1, w + 1):
+                pairs += min(e[j - x], e[j + x])
+                total += e[j - x] + e[j + x]
+                a = (g[j - x] + g[j + x]) / 2
+                even += a
+                even2 += a * a
+                odd2 += (g[j + x] - g[j - x]) ** 2 / 4
+            rho = total / (h * s * (2 * w + 1))
+            if rho < min_density:
+                continue
+            mean = (g[j] + 2 * even) / (2 * w + 1)
+            # sum over x of (a_x - mean)^2, the even part of the mean-removed profile
+            even2 = even2 - 2 * mean * even + w * mean * mean
+            se = 2 * pairs / (total - e[j]) if total > e[j] else 0.0
+            energy = even2 + odd2
+            sg = (even2 - odd2) / energy if energy > 1e-9 else 0.0
+            c0 = offset + j * s
+            for c in range(c0, c0 + s):
+                score[b, c] = (se + max(sg, 0.0)) / 2
+                half_px[b, c] = w * s
+                s_edge[b, c] = se
+                s_grey[b, c] = sg
+                density[b, c] = rho
+    return score, half_px, s_edge, s_grey, density
+
+
+@_jit
+def _peaks(score: F32Array, half_px: F32Array, bin_px: IntArray, threshold: float) -> IntArray:
+    """Step 3's local maxima: (P, 2) (band, bin's first column) of bins whose score reaches
+    `threshold` and is the largest within half their half-width (the first of equals)."""
+    n_bands, width = score.shape
+    found = []
+    for b in range(n_bands):
+        s = bin_px[b]
+        bins = width // s
+        offset = (width - bins * s) // 2
+        for j in range(bins):
+            c = offset + j * s
+            v = score[b, c]
+            if v < threshold:
+                continue
+            reach = max(1, int(half_px[b, c] / s))
+            best = True
+            for k in range(max(0, j - reach), min(bins, j + reach + 1)):
+                other = score[b, offset + k * s]
+                if other > v or (other == v and k < j):
+                    best = False
+                    break
+            if best:
+                found.append((b, c))
+    out = np.empty((len(found), 2), dtype=np.int64)
+    for i in range(len(found)):
+        out[i, 0] = found[i][0]
+        out[i, 1] = found[i][1]
+    return out
+
+
+@_jit
+def _nms(boxes: FloatArray, fraction: float, max_keep: int, of_union: bool) -> IntArray:
+    """Indices of the first `max_keep` of `boxes` (P, 4) (u0, v0, u1, v1), strongest first,
+    that do not overlap an earlier kept one by more than `fraction` of the smaller of the two
+    (of their union when `of_union`)."""
+    kept = np.empty(min(len(boxes), max_keep), dtype=np.int64)
+    n = 0
+    for i in range(len(boxes)):
+        if n == max_keep:
+            break
+        u0, v0, u1, v1 = boxes[i]
+        area = (u1 - u0) * (v1 - v0)
+        same = False
+        for k in kept[:n]:
+            a0, b0, a1, b1 = boxes[k]
+            shared = max(0.0, min(u1, a1) - max(u0, a0)) * max(0.0, min(v1, b1) - max(v0, b0))
+            other = (a1 - a0) * (b1 - b0)
+            base = area + other - shared if of_union else min(area, other)
+            if shared > fraction * max(base, 1.0):
+                same = True
+                break
+        if not same:
+            kept[n] = i
+            n += 1
+    return kept[:n]
+
+
+# --- step 4: refinement ---------------------------------------------------------------------
+
+
+@_jit
+def _row_edges(edges: npt.NDArray[np.int8], r: int, c0: int, c1: int, a2: int) -> tuple[int, int]:
+    """(edges, edges mirrored about column a2 / 2 by one of opposite sign within
+    MIRROR_TOLERANCE_PX) on row r of `edges` between columns c0 and c1 (exclusive)."""
+    count = mirrored = 0
+    for c in range(c0, c1):
+        e = edges[r, c]
+        if e == 0:
+            continue
+        count += 1
+        for shift in range(-MIRROR_TOLERANCE_PX, MIRROR_TOLERANCE_PX + 1):
+            m = a2 - c + shift
+            if c0 <= m < c1 and m != c and edges[r, m] == -e:
+                mirrored += 1
+                break
+    return count, mirrored
+
+
+@_jit
+def _extents(
+    edges: npt.NDArray[np.int8],
+    start: IntArray,
+    up_stop: IntArray,
+    down_stop: IntArray,
+    col0: IntArray,
+    col1: IntArray,
+    axis2: IntArray,
+    gap: IntArray,
+    fraction: float,
+) -> IntArray:
+    """Step 4's row scans for each candidate i on the strip's signed edges (strip rows).
+
+    From row start[i] up to up_stop[i], rows holding an edge in columns col0[i] .. col1[i]
+    (exclusive) continue the body until gap[i] rows hold none; from start[i] down to
+    down_stop[i] (exclusive) the same gives the feet, and symmetric rows (at least two edges,
+    `fraction` of them mirrored about column axis2[i] / 2 by an edge of opposite sign
+    within MIRROR_TOLERANCE_PX) give the bottom of the symmetric area. Returns (N, 4): top
+    row, 1 when the body still went on at up_stop, the feet's and the symmetric area's last
+    rows (start[i] - 1 when none)."""
+    out = np.empty((len(start), 4), dtype=np.int64)
+    for i in range(len(start)):
+        c0, c1, a2 = col0[i], col1[i], axis2[i]
+        top, misses, going = start[i] + 1, 0, 1
+        for r in range(start[i], up_stop[i] - 1, -1):
+            count, mirrored = _row_edges(edges, r, c0, c1, a2)
+            if count >= 2 and mirrored >= fraction * count:
+                top, misses = r, 0
+            else:
+                misses += 1
+                if misses >= gap[i]:
+                    going = 0
+                    break
+        feet = sym = start[i] - 1
+        feet_misses = sym_misses = 0
+        feet_on = sym_on = True
+        for r in range(start[i], down_stop[i]):
+            count, mirrored = _row_edges(edges, r, c0, c1, a2)
+            if feet_on:
+                if count > 0:
+                    feet, feet_misses = r, 0
+                else:
+                    feet_misses += 1
+                    feet_on = feet_misses < gap[i]
+            if sym_on:
+                if count >= 2 and mirrored >= fraction * count:
+                    sym, sym_misses = r, 0
+                else:
+                    sym_misses += 1
+                    sym_on = sym_misses < gap[i]
+            if not (feet_on or sym_on):
+                break
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = top, going, feet, sym
+    return out
+
+
+def _world(camera: CameraModel, boxes: FloatArray, axis_px: FloatArray) -> FloatArray:
+    """(N, 4) distance_m, lateral_m, width_m, height_m of boxes (N, 4) standing on the road:
+    where the base under the axis meets it, the base corners' lateral positions and the top's
+    height on the vertical plane there (NaN when the base is at or above the horizon)."""
+    n = len(boxes)
+    pts = np.concatenate(
+        [
+            np.column_stack([axis_px, boxes[:, 3]]),
+            boxes[:, [0, 3]],
+            boxes[:, [2, 3]],
+            np.column_stack([axis_px, boxes[:, 1]]),
+        ]
+    )
+    rays = camera.rays_vehicle(pts)
+    o = camera.position_vehicle_m
+    base, left, right, top = rays[:n], rays[n : 2 * n], rays[2 * n : 3 * n], rays[3 * n :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = np.where(base[:, 2] < 0, o[0] - o[2] / base[:, 2] * base[:, 0], np.nan)
+        y_left = o[1] + left[:, 1] * (x - o[0]) / left[:, 0]
+        y_right = o[1] + right[:, 1] * (x - o[0]) / right[:, 0]
+        height = o[2] + top[:, 2] * (x - o[0]) / top[:, 0]
+    return np.column_stack([x, (y_left + y_right) / 2, y_left - y_right, height])
+
+
+def _constraint(
+    no_top: bool,
+    band_distance_m: float,
+    distance_m: float,
+    width_m: float,
+    height_m: float,
+    params: PedestrianParams,
+) -> Verdict | None:
+    """Step 4's size and perspective constraints on a box whose base meets the road at
+    distance_m (NaN, a base at or above the horizon, fails them); None when it passes."""
+    if no_top:
+        return "no_top"
+    # the box was scanned as a person at band_distance_m: its base must stand within
+    # PERSPECTIVE_BANDS band steps of there, or the scan framed the wrong part of someone
+    steps = abs(math.log(distance_m / band_distance_m)) / math.log(params.distance_step_ratio)
+    if not steps <= PERSPECTIVE_BANDS:
+        return "perspective"
+    if not params.min_height_m <= height_m <= params.max_height_m:
+        return "size"
+    if not params.aspect_min <= width_m / height_m <= params.aspect_max:
+        return "aspect"
+    return None
+
+
+# --- step 5: fusion -------------------------------------------------------------------------
+
+
+def _obstacle_fraction(box: Box, mask: U8Array, mask_first_row: int) -> float:
+    """Share of the box's pixels (full image) that the reprojected mask marks; rows outside
+    the mask count as unmarked."""
+    u0, v0, u1, v1 = (round(x) for x in box)
+    area = max(0, u1 - u0) * max(0, v1 - v0)
+    if area == 0:
+        return 0.0
+    r0, r1 = max(v0 - mask_first_row, 0), min(v1 - mask_first_row, mask.shape[0])
+    c0, c1 = max(u0, 0), min(u1, mask.shape[1])
+    if r1 <= r0 or c1 <= c0:
+        return 0.0
+    return float(np.count_nonzero(mask[r0:r1, c0:c1])) / area
+
+
+def _inside_vehicle(box: Box, vehicle_boxes_px: Sequence[Box], fraction: float) -> bool:
+    area = max(rect_area(box), 1.0)
+    return any(intersection_area(box, v) / area > fraction for v in vehicle_boxes_px)
+
+
+# --- the stage ------------------------------------------------------------------------------
+
+
+def detect_pedestrians(
+    image: U8Array,
+    camera: CameraModel,
+    obstacle_mask: U8Array,
+    mask_first_row_px: int,
+    vehicle_boxes_px: Sequence[Box],
+    params: PedestrianParams,
+) -> PedestrianResult:
+    """Pedestrians in one frame (paper 000, II-D), steps 1-5 of the module docstring.
+
+    image: (H, W) uint8 grey full frame as `camera.intrinsics` says; camera: this frame's
+    camera, pitch included; obstacle_mask: (n, W) uint8, motion stereo's reprojected
+    obstacle mask (nonzero: obstacle), its row 0 being full-image row mask_first_row_px
+    (`MotionStereoResult.image_mask`); vehicle_boxes_px: (u0, v0, u1, v1) boxes of this
+    frame's detected vehicles.
+    """
+    camera.check_image(image)
+    require_2d_array("obstacle_mask", obstacle_mask, np.uint8, "uint8 mask")
+    width = camera.intrinsics.width_px
+    if obstacle_mask.shape[1] != width:
+        raise ValueError(
+            f"obstacle_mask: expected {width} columns (the image's), got {obstacle_mask.shape[1]}"
+        )
+    bands = bands_for(camera, params)
+    first, stop = _strip_rows(camera, bands, params)
+    n = len(bands)
+    if n == 0 or stop <= first:
+        empty = np.zeros((n, width), dtype=np.float32)
+        return PedestrianResult((first, first), bands, empty, empty.copy(), ())
+
+    # 2. the scan
+    strip = np.ascontiguousarray(image[first:stop])
+    edges = symmetry.signed_edges(symmetry.sobel(strip, 1), float(params.edge_threshold))
+    row1 = bands.foot_row_px - first
+    row0 = np.maximum(row1 - bands.height_px, 0)
+    half = bands.height_px / 2 / bands.bin_px
+    score, half_px, s_edge, s_grey, density = _scan(
+        edges,
+        strip,
+        row0,
+        np.minimum(row1, stop - first),
+        bands.bin_px,
+        np.maximum(np.ceil(params.aspect_min * half), 1).astype(np.int64),
+        np.floor(params.aspect_max * half).astype(np.int64),
+        params.border_column_fraction,
+        params.min_edge_density,
+    )
+
+    # 3. candidates: peaks, strongest first
+    peaks = _peaks(score, half_px, bands.bin_px, params.symmetry_threshold)
+    band, col = peaks[:, 0], peaks[:, 1]
+    order = np.argsort(-score[band, col], kind="stable")
+    band, col = band[order], col[order]
+    axis = col + (bands.bin_px[band] - 1) / 2
+    hw = half_px[band, col].astype(np.float64)
+    foot = bands.foot_row_px[band]
+    # the same person in neighbouring bands: boxes of about one size on one place
+    box = np.column_stack([axis - hw, foot - bands.height_px[band], axis + hw + 1, foot])
+    alike = _nms(box.astype(np.float64), SAME_PERSON_IOU, len(box), True)
+    band, col, axis, hw, foot = band[alike], col[alike], axis[alike], hw[alike], foot[alike]
+
+    # 4. refinement with the road plane, then the constraints
+    h = bands.height_px[band]
+    gap = np.maximum(np.round(params.gap_fraction * h), 2).astype(np.int64)
+    rows = stop - first
+    start = np.clip(foot - np.round(START_FRACTION * h).astype(np.int64) - first, 0, rows - 1)
+    head = foot - np.ceil(params.max_height_m * bands.px_per_m[band]).astype(np.int64)
+    found = _extents(
+        edges,
+        start,
+        np.maximum(head - gap - first, 0),
+        np.minimum(foot + np.round(FEET_BELOW_FRACTION * h).astype(np.int64) - first, rows),
+        np.maximum(np.floor(axis - hw), 0).astype(np.int64),
+        np.minimum(np.ceil(axis + hw) + 1, width).astype(np.int64),
+        np.round(2 * axis).astype(np.int64),
+        gap,
+        params.row_symmetry_fraction,
+    )
+    top = found[:, 0] + first
+    no_top = (found[:, 1] == 1) | (top < head)
+    feet_bottom = found[:, 2] + first + 1
+    sym_bottom = found[:, 3] + first + 1
+    extended = sym_bottom < foot - gap
+    bottom = np.maximum(np.maximum(feet_bottom, sym_bottom), np.where(extended, foot, 0))
+    u0, u1 = axis - hw, axis + hw + 1
+    boxes = np.column_stack([u0, top, u1, sym_bottom]).astype(np.float64)
+    extended_boxes = np.column_stack([u0, top, u1, bottom]).astype(np.float64)
+    world = _world(camera, extended_boxes, axis) if len(axis) else np.zeros((0, 4))
+    verdicts = [
+        _constraint(bool(no_top[i]), bands.distance_m[band[i]], d, w, h, params)
+        for i, (d, _, w, h) in enumerate(world.tolist())
+    ]
+    # one candidate per person: those that passed first, each strongest first
+    order = np.argsort([v is not None for v in verdicts], kind="stable")
+    chosen = order[
+        _nms(extended_boxes[order], params.nms_overlap_fraction, params.max_candidates, False)
+    ]
+
+    # 5. fusion, in the paper's order
+    candidates = []
+    for i in chosen.tolist():
+        b, c = int(band[i]), int(col[i])
+        distance_m, lateral_m, width_m, height_m = world[i].tolist()
+        ext_box = tuple(extended_boxes[i].tolist())
+        fraction = math.nan
+        verdict = verdicts[i]
+        if verdict is None:
+            fraction = _obstacle_fraction(ext_box, obstacle_mask, mask_first_row_px)
+            if fraction < params.min_obstacle_fraction:
+                verdict = "motion_stereo"
+            elif _inside_vehicle(ext_box, vehicle_boxes_px, params.vehicle_overlap_fraction):
+                verdict = "vehicle"
+            else:
+                verdict = "pedestrian"
+        candidates.append(
+            PedestrianCandidate(
+                band=b,
+                axis_px=float(axis[i]),
+                half_width_px=float(hw[i]),
+                score=float(score[b, c]),
+                edge_symmetry=float(s_edge[b, c]),
+                grey_symmetry=float(s_grey[b, c]),
+                edge_density=float(density[b, c]),
+                box_px=tuple(boxes[i].tolist()),
+                extended_box_px=ext_box,
+                extended=bool(extended[i]),
+                distance_m=distance_m,
+                lateral_m=lateral_m,
+                height_m=height_m,
+                width_m=width_m,
+                obstacle_fraction=fraction,
+                verdict=verdict,
+            )
+        )
+    score.flags.writeable = False
+    half_px.flags.writeable = False
+    return PedestrianResult((first, stop), bands, score, half_px, tuple(candidates))

@@ -1,0 +1,201 @@
+"""Known-answer tests of the symmetry pedestrian detector and its fusion filters.
+
+People, poles and tree trunks are rendered by the bundled drives' renderer on a straight
+road, seen by a standing car, without sensor noise; the label image gives each object's true
+box, and the camera gives where a box's base meets the road.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from functools import cache
+
+import numpy as np
+import numpy.typing as npt
+import pytest
+
+from core.params import PedestrianParams
+from core.pedestrian import PedestrianResult, bands_for, detect_pedestrians
+from core.synth.scene import Pedestrian, StaticObject, Trajectory
+from tests.core.roadscenes import RoadRenderer, camera, straight_road
+
+PERSON_ID = 7
+PERSON_S_M, PERSON_D_M, PERSON_HEIGHT_M = 14.0, 2.0, 1.75
+PARAMS = PedestrianParams()
+
+Box = tuple[float, float, float, float]
+
+
+def _person(s_m: float = PERSON_S_M, d_m: float = PERSON_D_M) -> Pedestrian:
+    standing = Trajectory.from_waypoints([(0.0, s_m, d_m), (10.0, s_m, d_m)])
+    return Pedestrian(PERSON_ID, PERSON_HEIGHT_M, 150, 40, standing)
+
+
+@cache
+def _scene(what: str) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint16]]:
+    """A standing car's view of `what`: "person", "empty", "pole" or "trunk"."""
+    people = (_person(),) if what == "person" else ()
+    statics = {
+        "pole": (StaticObject(PERSON_ID, "pole", PERSON_S_M, PERSON_D_M, 0.15, 6.0, 150),),
+        "trunk": (StaticObject(PERSON_ID, "tree", PERSON_S_M, PERSON_D_M, 0.45, 7.0, 60),),
+    }.get(what, ())
+    scene = straight_road(speed_mps=0.0, markings=False, pedestrians=people, statics=statics)
+    return RoadRenderer(scene)(0.0, camera().extrinsics.pitch_rad, noise=False)
+
+
+def _truth_box(labels: npt.NDArray[np.uint16]) -> Box:
+    rows, cols = np.nonzero(labels == PERSON_ID)
+    return float(cols.min()), float(rows.min()), float(cols.max() + 1), float(rows.max() + 1)
+
+
+def _mask(value: int) -> npt.NDArray[np.uint8]:
+    first, stop = camera().row_window_px
+    return np.full((stop - first, camera().intrinsics.width_px), value, dtype=np.uint8)
+
+
+def _detect(
+    image: npt.NDArray[np.uint8],
+    mask_value: int = 255,
+    vehicles: tuple[Box, ...] = (),
+    params: PedestrianParams = PARAMS,
+) -> PedestrianResult:
+    first, _ = camera().row_window_px
+    return detect_pedestrians(image, camera(), _mask(mask_value), first, vehicles, params)
+
+
+def _on(result: PedestrianResult, box: Box) -> list[str]:
+    """Verdicts of the candidates whose axis lies inside `box`'s columns."""
+    return [c.verdict for c in result.candidates if box[0] <= c.axis_px <= box[2]]
+
+
+def test_a_standing_person_is_found_with_the_right_box() -> None:
+    image, labels = _scene("person")
+    u0, v0, u1, v1 = _truth_box(labels)
+    result = _detect(image)
+    (found,) = result.kept
+    a0, b0, a1, b1 = found.extended_box_px
+    assert abs(b0 - v0) <= 2 and abs(b1 - v1) <= 2  # head and feet rows
+    assert abs(found.axis_px - (u0 + u1) / 2) <= 2
+    # the border columns are the arms', the widest part of the silhouette
+    assert abs((a1 - a0) - (u1 - u0)) <= 0.3 * (u1 - u0)
+    base = camera().ground_point([[found.axis_px, v1]])[0]
+    assert found.distance_m == pytest.approx(base[0], abs=0.02 * base[0])
+    assert found.lateral_m == pytest.approx(base[1], abs=0.2)
+    assert found.height_m == pytest.approx(PERSON_HEIGHT_M, rel=0.05)
+    assert not found.extended  # standing straight: the legs are symmetric to the road
+    assert found.obstacle_fraction == 1.0
+
+
+def test_legs_that_break_the_symmetry_are_extended_down_to_the_road() -> None:
+    image, labels = _scene("person")
+    empty, _ = _scene("empty")
+    _, v0, _, v1 = _truth_box(labels)
+    # legs lost against the road (trousers of its grey): background below the hands
+    hands = round(v1 - 0.45 * (v1 - v0))
+    no_legs = image.copy()
+    no_legs[hands:] = empty[hands:]
+    result = _detect(no_legs)
+    (found,) = result.kept
+    assert found.extended
+    assert found.box_px[3] <= hands + 2  # the symmetric area ends with the body
+    # down to the road where the band that found it stands its person: with the legs
+    # gone the image cannot tell a nearer person from a taller, farther one
+    assert found.extended_box_px[3] == result.bands.foot_row_px[found.band]
+    assert found.extended_box_px[1] == pytest.approx(v0, abs=2)
+    assert PARAMS.min_height_m <= found.height_m <= PARAMS.max_height_m
+
+
+@pytest.mark.parametrize(
+    ("what", "verdicts"), [("pole", {"no_top", "aspect"}), ("trunk", {"no_top"})]
+)
+def test_poles_and_trunks_are_pruned_by_the_constraints(what: str, verdicts: set[str]) -> None:
+    image, labels = _scene(what)
+    result = _detect(image)
+    assert not result.kept
+    on_it = _on(result, _truth_box(labels))
+    assert set(on_it) <= verdicts
+
+
+def test_a_person_outside_the_motion_stereo_mask_is_rejected_with_that_reason() -> None:
+    image, labels = _scene("person")
+    result = _detect(image, mask_value=0)
+    assert not result.kept
+    (found,) = result.rejected_by_motion_stereo
+    assert found.obstacle_fraction == 0.0
+    assert _on(result, _truth_box(labels)) == ["motion_stereo"]
+
+
+def test_a_person_inside_a_detected_vehicle_is_rejected_with_that_reason() -> None:
+    image, labels = _scene("person")
+    u0, v0, u1, v1 = _truth_box(labels)
+    around = (u0 - 20, v0 - 10, u1 + 20, v1 + 5)
+    result = _detect(image, vehicles=(around,))
+    assert not result.kept
+    assert len(result.rejected_by_vehicle) == 1
+    # the motion-stereo filter comes first: a box it rejects is never checked against vehicles
+    both = _detect(image, mask_value=0, vehicles=(around,))
+    assert [c.verdict for c in both.candidates if c.verdict in ("vehicle", "motion_stereo")] == [
+        "motion_stereo"
+    ]
+
+
+def test_an_empty_road_has_no_pedestrian() -> None:
+    image, _ = _scene("empty")
+    assert not _detect(image).kept
+    blank = np.full_like(image, 128)
+    result = _detect(blank)
+    assert result.candidates == ()
+    assert not result.symmetry.any()
+
+
+def test_bands_follow_the_road_plane() -> None:
+    bands = bands_for(camera(), PARAMS)
+    first, stop = camera().row_window_px
+    assert np.all(np.diff(bands.distance_m) > 0)
+    assert np.all(np.diff(bands.foot_row_px) < 0)  # farther people stand higher
+    assert np.all((bands.foot_row_px > first) & (bands.foot_row_px <= stop))
+    zeros = np.zeros_like(bands.distance_m)
+    feet, _ = camera().project(np.column_stack([bands.distance_m, zeros, zeros]))
+    np.testing.assert_allclose(bands.foot_row_px, feet[:, 1], atol=0.5)
+    # a band's box is a scan_height_m person there
+    heads, _ = camera().project(
+        np.column_stack([bands.distance_m, zeros, np.full_like(zeros, PARAMS.scan_height_m)])
+    )
+    np.testing.assert_allclose(bands.height_px, feet[:, 1] - heads[:, 1], atol=1.0)
+    result = _detect(_scene("empty")[0])
+    top, bottom = result.strip_rows_px
+    assert first <= top < bottom <= stop
+    assert result.symmetry.shape == (len(bands), camera().intrinsics.width_px)
+
+
+def test_a_range_outside_the_window_gives_an_empty_result() -> None:
+    params = replace(PARAMS, min_distance_m=0.5, max_distance_m=1.5)  # under the window
+    result = _detect(_scene("person")[0], params=params)
+    assert len(result.bands) == 0
+    assert result.candidates == ()
+
+
+def test_bad_inputs_name_the_argument() -> None:
+    image, _ = _scene("person")
+    first, _ = camera().row_window_px
+    with pytest.raises(ValueError, match="image"):
+        detect_pedestrians(image[:100], camera(), _mask(255), first, (), PARAMS)
+    with pytest.raises(ValueError, match="obstacle_mask"):
+        detect_pedestrians(image, camera(), _mask(255)[:, :100], first, (), PARAMS)
+    with pytest.raises(ValueError, match="obstacle_mask"):
+        detect_pedestrians(image, camera(), _mask(255).astype(np.float32), first, (), PARAMS)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("distance_step_ratio", 1.0),
+        ("scan_bins", 2),
+        ("max_candidates", 0),
+        ("gap_fraction", 1.5),
+        ("aspect_max", 0.1),
+    ],
+)
+def test_bad_parameters_name_the_field(field: str, value: object) -> None:
+    with pytest.raises(ValueError, match=field):
+        replace(PARAMS, **{field: value})
