@@ -1,0 +1,547 @@
+"""Tracks of vehicles, pedestrians and guard-rail targets over time (beyond the papers).
+
+Paper 001 (conclusions): "A tracking algorithm might be very helpful to increase the robustness
+of the system and the detection persistence." Paper 002: "False positives are never consecutive
+and may be easily filtered using a simple time correlation method." This module is both: one
+track per object, confirmed after `confirm_frames` hits, kept through `max_missed_frames`
+misses. The engine reports the papers' per-frame detections beside the confirmed tracks.
+
+State of a track, in the current vehicle frame (x forward, y left, origin on the ground under
+the rear axle): s = (x_m, y_m, vx_mps, vy_mps), the velocity over the ground expressed in the
+vehicle axes (a parked car has 0), with its 4x4 covariance P; the width is a separate scalar
+filter (a random walk).
+
+`Tracker.update(measurements, ego, dt_s)`, one call per frame:
+
+1. ego compensation: ego = (dx, dy, dyaw), the car's motion since the previous frame in the
+   previous vehicle frame, moves every track into the new frame:
+       p' = R(-dyaw) (p - (dx, dy)),   v' = R(-dyaw) v,   P' = T P T^T,  T = diag(R, R)(-dyaw)
+   and the history points as p. Unknown ego motion (None) is taken as none, with
+   `unknown_ego_sigma_m` added in quadrature to the position sigma on each axis.
+2. prediction, constant velocity over dt_s: p += v dt_s; white acceleration of spectral
+   density q per kind adds q [[dt^3/3, dt^2/2], [dt^2/2, dt]] per axis to P. The width's
+   variance grows by `width_walk_m2ps` dt_s.
+3. association, per kind only: innovation nu = z - p, S = P_pos + R; a pair is allowed when
+   nu^T S^-1 nu <= `gate_chi2` and |nu| <= `gate_m` (a hard cap in metres, whatever the
+   covariance). Among the allowed pairs the assignment with the most pairs, then the least sum
+   of nu^T S^-1 nu, is taken (`solve_assignment`, Hungarian method).
+4. update, Kalman with z = (x_m, y_m), Joseph form. Measurement sigmas per kind: vehicles
+   radar distance `radar_sigma_x_m` and vision lateral `vision_sigma_y_m`; pedestrians
+   distance from the foot row `pedestrian_sigma_x_fraction` * x (at least
+   `pedestrian_min_sigma_x_m`) and `vision_sigma_y_m`; guard rails `radar_sigma_x_m` and
+   `guard_rail_sigma_y_m`. Width: sigma `width_sigma_m`.
+5. lifecycle: an unmatched measurement starts a tentative track (its position and width
+   measured, speed 0 with sigma `initial_velocity_sigma_mps`, id = the next integer). A track
+   is confirmed once it has `confirm_frames` hits and stays confirmed. A tentative track is
+   dropped at its first miss, so a one-frame false positive is never confirmed; a confirmed
+   track is dropped at its (`max_missed_frames` + 1)-th consecutive miss. Dropped ids are
+   listed in `TrackResult.ended` and never reused (until `Tracker.reset`).
+
+Guard rails are correlated the same way: every radar target labelled guard rail is a
+measurement of kind "guard_rail"; its tracked verdict is membership of
+`confirmed_sources(result, "guard_rail")`.
+
+Notes:
+    - All of it goes beyond the papers, which have no tracker; no parameter comes from them.
+    - The association maximises the number of gated pairs before minimising the cost (what a
+      cost matrix with large finite entries for the gated pairs gives); a track never takes a
+      measurement of another kind.
+    - `ego.dt_s` is not used: `dt_s` is the interval of the prediction (the engine passes the
+      same interval to both).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+
+from core.checks import require_finite
+from core.ego import EgoMotion
+from core.params import TrackingParams
+
+Kind = Literal["vehicle", "pedestrian", "guard_rail"]
+KINDS: tuple[Kind, ...] = ("vehicle", "pedestrian", "guard_rail")
+
+Box = tuple[float, float, float, float]
+FloatArray = npt.NDArray[np.float64]
+
+
+def _require_kind(name: str, kind: object) -> None:
+    if kind not in KINDS:
+        raise ValueError(f"{name}: expected one of {', '.join(KINDS)}, got {kind!r}")
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """One detection of this frame in the current vehicle frame (x forward, y left).
+
+    x_m: distance ahead (radar for vehicles and guard rails; ground plane for pedestrians);
+    y_m: lateral centre, positive left; width_m: vision width (0.0 for guard rails); box_px:
+    (u0, v0, u1, v1) full-image pixels ((0, 0, 0, 0) allowed); source_index: index of the
+    detection in the engine's per-frame list of its kind. ValueError naming the field when a
+    number is not finite, width_m < 0, the box is inverted or source_index < 0.
+    """
+
+    kind: Kind
+    x_m: float
+    y_m: float
+    width_m: float
+    box_px: Box
+    source_index: int
+
+    def __post_init__(self) -> None:
+        _require_kind("kind", self.kind)
+        for name in ("x_m", "y_m", "width_m"):
+            require_finite(name, getattr(self, name))
+        if self.width_m < 0:
+            raise ValueError(f"width_m: expected a width >= 0, got {self.width_m}")
+        if len(self.box_px) != 4:
+            raise ValueError(f"box_px: expected (u0, v0, u1, v1), got {self.box_px!r}")
+        for value in self.box_px:
+            require_finite("box_px", value)
+        u0, v0, u1, v1 = self.box_px
+        if u1 < u0 or v1 < v0:
+            raise ValueError(f"box_px: expected u1 >= u0 and v1 >= v0, got {self.box_px!r}")
+        index = self.source_index
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or index < 0:
+            raise ValueError(f"source_index: expected an integer >= 0, got {self.source_index!r}")
+
+
+@dataclass(frozen=True)
+class Track:
+    """One tracked object after an update, in the current vehicle frame.
+
+    id: unique within a Tracker since its last reset, from 1. x_m, y_m: filtered position;
+    vx_mps, vy_mps: velocity over the ground in the vehicle axes; width_m: filtered width;
+    sigma_x_m, sigma_y_m: sqrt of the position covariance diagonal; box_px: the last associated
+    detection's box; hits: frames with a detection; misses: consecutive frames without one (0
+    when measured this frame); age: frames since birth (1 on the first); confirmed: hits reached
+    confirm_frames; source_index: this frame's Measurement.source_index, None when missed;
+    history_m: up to history_length filtered positions (x_m, y_m), oldest first, this frame's
+    last, all in the current vehicle frame.
+    """
+
+    id: int
+    kind: Kind
+    x_m: float
+    y_m: float
+    vx_mps: float
+    vy_mps: float
+    width_m: float
+    sigma_x_m: float
+    sigma_y_m: float
+    box_px: Box
+    hits: int
+    misses: int
+    age: int
+    confirmed: bool
+    source_index: int | None
+    history_m: tuple[tuple[float, float], ...]
+
+
+@dataclass(frozen=True)
+class TrackResult:
+    """Every live track after an update (tentative and confirmed), ordered by id, and the ids
+    dropped by it (tentative tracks at their first miss, confirmed ones after more than
+    max_missed_frames misses), ascending."""
+
+    tracks: tuple[Track, ...]
+    ended: tuple[int, ...]
+
+    @property
+    def confirmed(self) -> tuple[Track, ...]:
+        return tuple(t for t in self.tracks if t.confirmed)
+
+    def of_kind(self, kind: Kind, confirmed_only: bool = True) -> tuple[Track, ...]:
+        """The tracks of one kind, only the confirmed ones by default."""
+        _require_kind("kind", kind)
+        return tuple(
+            t for t in self.tracks if t.kind == kind and (t.confirmed or not confirmed_only)
+        )
+
+
+def confirmed_sources(result: TrackResult, kind: Kind) -> frozenset[int]:
+    """source_index of this frame's measurements of `kind` taken by a confirmed track."""
+    return frozenset(
+        t.source_index
+        for t in result.of_kind(kind, confirmed_only=True)
+        if t.source_index is not None
+    )
+
+
+def solve_assignment(cost: FloatArray) -> tuple[tuple[int, int], ...]:
+    """Optimal assignment of rows to columns, (row, col) pairs in ascending row order.
+
+    cost: (R, C) float64; +inf marks a forbidden pair, the others must be finite. The result
+    has the most pairs possible among the allowed ones and, among those, the least total cost.
+    Hungarian method with potentials (O(n^2 m)), forbidden pairs as a finite cost larger than
+    any difference of allowed totals, so the most pairs come first. When every row and every
+    column has at most one allowed pair, those pairs are the answer and the method is skipped.
+    """
+    if cost.ndim != 2:
+        raise ValueError(f"cost: expected an (R, C) array, got shape {cost.shape}")
+    if np.isnan(cost).any() or np.isneginf(cost).any():
+        raise ValueError("cost: expected finite costs or +inf for a forbidden pair, got nan/-inf")
+    return tuple(sorted(_assign(cost.astype(np.float64).tolist())))
+
+
+def _assign(cost: list[list[float]]) -> list[tuple[int, int]]:
+    """solve_assignment on a checked cost matrix given as rows of floats, pairs in any order.
+
+    When every row and every column has at most one allowed pair (no pair allowed included),
+    those pairs are the only largest matching, which the Hungarian method would return too.
+    """
+    allowed = [[j for j, c in enumerate(row) if c != math.inf] for row in cost]
+    if all(len(cols) <= 1 for cols in allowed):
+        pairs = [(i, cols[0]) for i, cols in enumerate(allowed) if cols]
+        if len({j for _, j in pairs}) == len(pairs):
+            return pairs
+    transposed = len(cost) > len(cost[0])
+    a = [list(col) for col in zip(*cost, strict=True)] if transposed else cost
+    n, m = len(a), len(a[0])
+    finite = [c for row in a for c in row if c != math.inf]
+    top = max(finite)
+    forbidden = top + 2.0 * n * (top - min(finite)) + 1.0
+    big = [[forbidden if c == math.inf else c for c in row] for row in a]
+    # e-maxx formulation, 1-based with a virtual column 0
+    u = [0.0] * (n + 1)
+    v = [0.0] * (m + 1)
+    row_of = [0] * (m + 1)  # row_of[j]: row assigned to column j (0: none)
+    way = [0] * (m + 1)
+    for i in range(1, n + 1):
+        row_of[0] = i
+        j0 = 0
+        minv = [math.inf] * (m + 1)
+        used = [False] * (m + 1)
+        while True:
+            used[j0] = True
+            i0 = row_of[j0]
+            row, u_i0 = big[i0 - 1], u[i0]
+            delta, j1 = math.inf, 0
+            for j in range(1, m + 1):
+                if not used[j]:
+                    reduced = row[j - 1] - u_i0 - v[j]
+                    if reduced < minv[j]:
+                        minv[j] = reduced
+                        way[j] = j0
+                    if minv[j] < delta:
+                        delta, j1 = minv[j], j
+            for j in range(m + 1):
+                if used[j]:
+                    u[row_of[j]] += delta
+                    v[j] -= delta
+                else:
+                    minv[j] -= delta
+            j0 = j1
+            if row_of[j0] == 0:
+                break
+        while j0 != 0:
+            j1 = way[j0]
+            row_of[j0] = row_of[j1]
+            j0 = j1
+    pairs = [
+        (row_of[j] - 1, j - 1)
+        for j in range(1, m + 1)
+        if row_of[j] != 0 and a[row_of[j] - 1][j - 1] != math.inf
+    ]
+    return [(c, r) for r, c in pairs] if transposed else pairs
+
+
+def _measurement_var(params: TrackingParams, kind: Kind, x_m: float) -> tuple[float, float]:
+    """The diagonal of R, the covariance of a measurement's (x_m, y_m), m^2."""
+    if kind == "vehicle":
+        sx, sy = params.radar_sigma_x_m, params.vision_sigma_y_m
+    elif kind == "pedestrian":
+        sx = max(params.pedestrian_sigma_x_fraction * abs(x_m), params.pedestrian_min_sigma_x_m)
+        sy = params.vision_sigma_y_m
+    else:
+        sx, sy = params.radar_sigma_x_m, params.guard_rail_sigma_y_m
+    return sx * sx, sy * sy
+
+
+def _process_noise(params: TrackingParams, dt_s: float) -> dict[Kind, tuple[float, float, float]]:
+    """Per kind, the entries of Q on one axis: (q dt^3/3, q dt^2/2, q dt)."""
+    psd: dict[Kind, float] = {
+        "vehicle": params.vehicle_accel_psd_m2ps3,
+        "pedestrian": params.pedestrian_accel_psd_m2ps3,
+        "guard_rail": params.guard_rail_accel_psd_m2ps3,
+    }
+    return {k: (q * dt_s**3 / 3.0, q * dt_s**2 / 2.0, q * dt_s) for k, q in psd.items()}
+
+
+def _turned(
+    m00: float, m01: float, m10: float, m11: float, cos: float, sin: float
+) -> tuple[float, float, float, float]:
+    """R M R^T for R = [[cos, -sin], [sin, cos]] and M = [[m00, m01], [m10, m11]], row by row."""
+    r00, r01 = cos * m00 - sin * m10, cos * m01 - sin * m11  # R M
+    r10, r11 = sin * m00 + cos * m10, sin * m01 + cos * m11
+    return (
+        r00 * cos - r01 * sin,
+        r00 * sin + r01 * cos,
+        r10 * cos - r11 * sin,
+        r10 * sin + r11 * cos,
+    )
+
+
+Row = tuple[float, float, float, float]
+
+
+def _minus(v: Row, a: float, w0: Row, b: float, w1: Row) -> Row:
+    """v - a w0 - b w1 for 4-vectors."""
+    return (
+        v[0] - a * w0[0] - b * w1[0],
+        v[1] - a * w0[1] - b * w1[1],
+        v[2] - a * w0[2] - b * w1[2],
+        v[3] - a * w0[3] - b * w1[3],
+    )
+
+
+class _TrackState:
+    """The mutable filter behind one Track: s and P as in the module docstring.
+
+    s = (x, y, vx, vy) are four floats; P is kept as its upper triangle, row by row,
+    (P00, P01, P02, P03, P11, P12, P13, P22, P23, P33), and read in 2x2 blocks: A = P[:2, :2]
+    (position), B = P[:2, 2:] (position-velocity), C = P[2:, 2:] (velocity). Plain floats,
+    because numpy's overhead per call dwarfs the arithmetic of 4x4 matrices.
+    """
+
+    def __init__(
+        self, track_id: int, m: Measurement, r: tuple[float, float], params: TrackingParams
+    ) -> None:
+        self.id = track_id
+        self.kind: Kind = m.kind
+        self.x, self.y, self.vx, self.vy = float(m.x_m), float(m.y_m), 0.0, 0.0
+        v0 = params.initial_velocity_sigma_mps**2
+        self.P = (r[0], 0.0, 0.0, 0.0, r[1], 0.0, 0.0, v0, 0.0, v0)
+        self.width_m = float(m.width_m)
+        self.width_var_m2 = params.width_sigma_m**2
+        self.box_px = m.box_px
+        self.hits, self.misses, self.age = 1, 0, 1
+        self.confirmed = self.hits >= params.confirm_frames
+        self.source_index: int | None = m.source_index
+        self.history_m: tuple[tuple[float, float], ...] = ((self.x, self.y),)
+
+    def move(self, cos: float, sin: float, dx_m: float, dy_m: float) -> None:
+        """Step 1: into the new vehicle frame; (cos, sin) of -dyaw.
+
+        Every block of P turns as R(-dyaw) M R(-dyaw)^T, which is T P T^T.
+        """
+        x, y = self.x - dx_m, self.y - dy_m
+        self.x, self.y = cos * x - sin * y, sin * x + cos * y
+        self.vx, self.vy = cos * self.vx - sin * self.vy, sin * self.vx + cos * self.vy
+        p00, p01, p02, p03, p11, p12, p13, p22, p23, p33 = self.P
+        a00, a01, _, a11 = _turned(p00, p01, p01, p11, cos, sin)
+        b00, b01, b10, b11 = _turned(p02, p03, p12, p13, cos, sin)
+        c00, c01, _, c11 = _turned(p22, p23, p23, p33, cos, sin)
+        self.P = (a00, a01, b00, b01, a11, b10, b11, c00, c01, c11)
+        history = []
+        for hx, hy in self.history_m:
+            x, y = hx - dx_m, hy - dy_m
+            history.append((cos * x - sin * y, sin * x + cos * y))
+        self.history_m = tuple(history)
+
+    def stay(self, lost_var_m2: float) -> None:
+        """Step 1 for an unknown ego motion: no move, lost_var_m2 added to P00 and P11."""
+        p00, p01, p02, p03, p11, p12, p13, p22, p23, p33 = self.P
+        self.P = (p00 + lost_var_m2, p01, p02, p03, p11 + lost_var_m2, p12, p13, p22, p23, p33)
+
+    def predict(self, dt_s: float, q: tuple[float, float, float], width_growth_m2: float) -> None:
+        """Step 2: constant velocity with white acceleration, P = F P F^T + Q.
+
+        In blocks, F P F^T has C' = C, B' = B + dt C and A' = A + dt (B^T + B'); q is Q's
+        (position, cross, velocity) entry on each axis.
+        """
+        self.x += self.vx * dt_s
+        self.y += self.vy * dt_s
+        q_pos, q_cross, q_vel = q
+        p00, p01, p02, p03, p11, p12, p13, p22, p23, p33 = self.P
+        b00, b01, b10, b11 = p02 + dt_s * p22, p03 + dt_s * p23, p12 + dt_s * p23, p13 + dt_s * p33
+        self.P = (
+            p00 + dt_s * p02 + dt_s * b00 + q_pos,
+            p01 + dt_s * p12 + dt_s * b01,
+            b00 + q_cross,
+            b01,
+            p11 + dt_s * p13 + dt_s * b11 + q_pos,
+            b10,
+            b11 + q_cross,
+            p22 + q_vel,
+            p23,
+            p33 + q_vel,
+        )
+        self.width_var_m2 += width_growth_m2
+
+    def gated_cost(
+        self, z_x: float, z_y: float, r: tuple[float, float], params: TrackingParams
+    ) -> float:
+        """Step 3: nu^T S^-1 nu, or inf outside the gates; r: the diagonal of R."""
+        nu_x, nu_y = z_x - self.x, z_y - self.y
+        if math.hypot(nu_x, nu_y) > params.gate_m:
+            return math.inf
+        p00, p01, _, _, p11 = self.P[:5]
+        s00, s01, s11 = p00 + r[0], p01, p11 + r[1]
+        d2 = (s11 * nu_x * nu_x - 2.0 * s01 * nu_x * nu_y + s00 * nu_y * nu_y) / (
+            s00 * s11 - s01 * s01
+        )
+        return math.inf if d2 > params.gate_chi2 else d2
+
+    def correct(
+        self, m: Measurement, z: tuple[float, float], r: tuple[float, float], params: TrackingParams
+    ) -> None:
+        """Step 4: Kalman update of position and width; a hit. z: (x_m, y_m); r: diag of R.
+
+        K = P H^T S^-1 (4, 2); Joseph form P' = (I - K H) P (I - K H)^T + K R K^T, computed
+        as W = P - K P[:2] and P' = W - (W[:, :2] - K R) K^T, row by row.
+        """
+        p00, p01, p02, p03, p11, p12, p13, p22, p23, p33 = self.P
+        rows = (
+            (p00, p01, p02, p03),
+            (p01, p11, p12, p13),
+            (p02, p12, p22, p23),
+            (p03, p13, p23, p33),
+        )
+        r_x, r_y = r
+        s00, s01, s11 = p00 + r_x, p01, p11 + r_y
+        det = s00 * s11 - s01 * s01
+        i00, i01, i11 = s11 / det, -s01 / det, s00 / det  # S^-1
+        gain = [(row[0] * i00 + row[1] * i01, row[0] * i01 + row[1] * i11) for row in rows]
+        nu_x, nu_y = z[0] - self.x, z[1] - self.y
+        (k00, k01), (k10, k11), (k20, k21), (k30, k31) = gain
+        self.x += k00 * nu_x + k01 * nu_y
+        self.y += k10 * nu_x + k11 * nu_y
+        self.vx += k20 * nu_x + k21 * nu_y
+        self.vy += k30 * nu_x + k31 * nu_y
+        k_col0, k_col1 = (k00, k10, k20, k30), (k01, k11, k21, k31)
+        w = [
+            _minus(row, k0, rows[0], k1, rows[1]) for row, (k0, k1) in zip(rows, gain, strict=True)
+        ]
+        n0, n1, n2, n3 = (
+            _minus(wi, wi[0] - r_x * k0, k_col0, wi[1] - r_y * k1, k_col1)
+            for wi, (k0, k1) in zip(w, gain, strict=True)
+        )
+        self.P = (n0[0], n0[1], n0[2], n0[3], n1[1], n1[2], n1[3], n2[2], n2[3], n3[3])
+        r_w = params.width_sigma_m**2
+        gain_w = self.width_var_m2 / (self.width_var_m2 + r_w)
+        self.width_m += gain_w * (m.width_m - self.width_m)
+        self.width_var_m2 *= 1.0 - gain_w
+        self.box_px = m.box_px
+        self.hits += 1
+        self.misses = 0
+        self.confirmed = self.confirmed or self.hits >= params.confirm_frames
+        self.source_index = m.source_index
+
+    def miss(self) -> None:
+        self.misses += 1
+        self.source_index = None
+
+    def record(self, params: TrackingParams) -> None:
+        """Append this frame's position to the history, keeping the last history_length."""
+        self.history_m = (*self.history_m, (self.x, self.y))[-params.history_length :]
+
+    def snapshot(self) -> Track:
+        return Track(
+            id=self.id,
+            kind=self.kind,
+            x_m=self.x,
+            y_m=self.y,
+            vx_mps=self.vx,
+            vy_mps=self.vy,
+            width_m=self.width_m,
+            sigma_x_m=math.sqrt(self.P[0]),
+            sigma_y_m=math.sqrt(self.P[4]),
+            box_px=self.box_px,
+            hits=self.hits,
+            misses=self.misses,
+            age=self.age,
+            confirmed=self.confirmed,
+            source_index=self.source_index,
+            history_m=self.history_m,
+        )
+
+
+class Tracker:
+    """The tracks of one drive (STYLE 12): feed it every frame's measurements in order.
+
+    `reset()` forgets every track (a seek) and restarts ids at 1, so replaying the same
+    measurements after a reset gives identical results, ids included.
+    """
+
+    def __init__(self, params: TrackingParams) -> None:
+        self.params = params
+        self.reset()
+
+    def reset(self) -> None:
+        self._tracks: list[_TrackState] = []
+        self._next_id = 1
+
+    def update(
+        self, measurements: Sequence[Measurement], ego: EgoMotion | None, dt_s: float
+    ) -> TrackResult:
+        """One frame: steps 1-5 of the module docstring.
+
+        measurements: this frame's detections of every kind, in the current vehicle frame;
+        ego: the car's motion since the previous frame (None: unknown); dt_s: time since the
+        previous frame, s. ValueError naming dt_s when it is not finite or < 0, and naming
+        measurements when a (kind, source_index) appears twice.
+        """
+        require_finite("dt_s", dt_s)
+        if dt_s < 0:
+            raise ValueError(f"dt_s: expected an interval >= 0, got {dt_s}")
+        keys = [(m.kind, m.source_index) for m in measurements]
+        if len(set(keys)) != len(keys):
+            twice = next(k for i, k in enumerate(keys) if k in keys[:i])
+            raise ValueError(f"measurements: (kind, source_index) {twice} appears twice")
+        p = self.params
+        tracks = self._tracks
+        # 1-2. ego compensation and prediction
+        if ego is None:
+            lost_var_m2 = p.unknown_ego_sigma_m**2
+            for track in tracks:
+                track.stay(lost_var_m2)
+        else:
+            cos, sin = math.cos(-ego.dyaw_rad), math.sin(-ego.dyaw_rad)
+            dx_m, dy_m = float(ego.dx_m), float(ego.dy_m)
+            for track in tracks:
+                track.move(cos, sin, dx_m, dy_m)
+        noise = _process_noise(p, dt_s)
+        width_growth_m2 = p.width_walk_m2ps * dt_s
+        for track in tracks:
+            track.predict(dt_s, noise[track.kind], width_growth_m2)
+        # 3. association, per kind
+        zs = [(float(m.x_m), float(m.y_m)) for m in measurements]
+        rs = [_measurement_var(p, m.kind, m.x_m) for m in measurements]
+        taken: dict[int, int] = {}  # track position in tracks -> measurement position
+        for kind in KINDS:
+            rows = [i for i, t in enumerate(tracks) if t.kind == kind]
+            cols = [j for j, m in enumerate(measurements) if m.kind == kind]
+            if not rows or not cols:
+                continue
+            cost = [[tracks[i].gated_cost(*zs[j], rs[j], p) for j in cols] for i in rows]
+            for r, c in _assign(cost):
+                taken[rows[r]] = cols[c]
+        # 4-5. update, misses and births
+        live: list[_TrackState] = []
+        ended: list[int] = []
+        for i, track in enumerate(tracks):
+            track.age += 1
+            j = taken.get(i)
+            if j is not None:
+                track.correct(measurements[j], zs[j], rs[j], p)
+            else:
+                track.miss()
+                if not track.confirmed or track.misses > p.max_missed_frames:
+                    ended.append(track.id)
+                    continue
+            track.record(p)
+            live.append(track)
+        used = set(taken.values())
+        for j, m in enumerate(measurements):
+            if j not in used:
+                live.append(_TrackState(self._next_id, m, rs[j], p))
+                self._next_id += 1
+        self._tracks = live  # ascending ids: survivors in order, then the newborn
+        return TrackResult(tuple(t.snapshot() for t in live), tuple(sorted(ended)))

@@ -1,0 +1,435 @@
+"""Tracking (beyond the papers): ego compensation, convergence, lifecycle, ids, assignment."""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from core.ego import EgoMotion, step
+from core.params import ParamsError, TrackingParams
+from core.tracking import (
+    Kind,
+    Measurement,
+    Track,
+    Tracker,
+    TrackResult,
+    confirmed_sources,
+    solve_assignment,
+)
+
+DT_S = 0.1
+P = TrackingParams()
+STILL = EgoMotion.still(DT_S)
+
+
+def _m(
+    x_m: float, y_m: float, index: int = 0, kind: Kind = "vehicle", width_m: float = 1.8
+) -> Measurement:
+    return Measurement(kind, x_m, y_m, width_m, (0.0, 0.0, 10.0, 10.0), index)
+
+
+def _by_source(result: TrackResult, kind: Kind = "vehicle") -> dict[int, Track]:
+    return {t.source_index: t for t in result.of_kind(kind, False) if t.source_index is not None}
+
+
+def _vehicle_frame(
+    world_xy: tuple[float, float], pose: tuple[float, float, float]
+) -> tuple[float, float]:
+    """A world point seen from the car at pose (x, y, heading): R(-heading) (p - car)."""
+    dx, dy = world_xy[0] - pose[0], world_xy[1] - pose[1]
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    return (c * dx + s * dy, -s * dx + c * dy)
+
+
+def _compose(pose: tuple[float, float, float], ego: EgoMotion) -> tuple[float, float, float]:
+    """The car's world pose after `ego`, which is expressed in the car's frame at `pose`."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    return (
+        pose[0] + c * ego.dx_m - s * ego.dy_m,
+        pose[1] + s * ego.dx_m + c * ego.dy_m,
+        pose[2] + ego.dyaw_rad,
+    )
+
+
+# --- ego compensation and the motion model ---------------------------------------------------
+
+
+@pytest.mark.parametrize("yaw_rate_radps", [0.0, 0.2, -0.3])
+def test_parked_car_stays_parked_while_the_ego_car_drives_and_turns(
+    yaw_rate_radps: float,
+) -> None:
+    # The parked car is at a fixed world point; the ego car drives at 5 m/s, straight or on a
+    # circle; each frame measures the exact point in the current vehicle frame.
+    parked = (30.0, 4.0)
+    ego = step(5.0, yaw_rate_radps, DT_S)
+    tracker = Tracker(P)
+    pose = (0.0, 0.0, 0.0)
+    result = tracker.update([_m(*_vehicle_frame(parked, pose))], None, DT_S)
+    for _ in range(35):
+        pose = _compose(pose, ego)
+        truth = _vehicle_frame(parked, pose)
+        result = tracker.update([_m(*truth)], ego, DT_S)
+        (track,) = result.tracks
+        assert (track.x_m, track.y_m) == pytest.approx(truth, abs=1e-9)
+        assert (track.vx_mps, track.vy_mps) == pytest.approx((0.0, 0.0), abs=1e-9)
+    assert track.id == 1 and track.confirmed and track.hits == 36
+    # A car parked in the world stood at the same point of the current frame all along.
+    assert len(track.history_m) == P.history_length
+    for point in track.history_m:
+        assert point == pytest.approx(truth, abs=1e-9)
+
+
+def test_parked_car_with_noisy_measurements_keeps_speed_near_zero() -> None:
+    rng = np.random.default_rng(7)
+    parked = (25.0, -3.0)
+    ego = step(15.0, 0.15, DT_S)
+    tracker = Tracker(P)
+    pose = (0.0, 0.0, 0.0)
+    result = tracker.update([_m(*_vehicle_frame(parked, pose))], STILL, DT_S)
+    for _ in range(30):
+        pose = _compose(pose, ego)
+        truth = _vehicle_frame(parked, pose)
+        noisy = truth + rng.normal(0.0, (0.3, 0.1))
+        result = tracker.update([_m(noisy[0], noisy[1])], ego, DT_S)
+    (track,) = result.tracks
+    assert track.id == 1
+    assert math.hypot(track.vx_mps, track.vy_mps) < 1.0
+    assert (track.x_m, track.y_m) == pytest.approx(truth, abs=0.3)
+
+
+def test_constant_velocity_target_converges_to_its_true_velocity() -> None:
+    # Ego straight at 10 m/s; the target drives at (12, -0.5) m/s over the ground, so it is
+    # seen at (30 + 2 t, 3 - 0.5 t) in the vehicle frame.
+    ego = step(10.0, 0.0, DT_S)
+    tracker = Tracker(P)
+    for k in range(50):
+        t_s = k * DT_S
+        result = tracker.update([_m(30.0 + 2.0 * t_s, 3.0 - 0.5 * t_s)], ego, DT_S)
+    (track,) = result.tracks
+    assert (track.vx_mps, track.vy_mps) == pytest.approx((12.0, -0.5), abs=0.05)
+    assert (track.x_m, track.y_m) == pytest.approx((30.0 + 2.0 * 4.9, 3.0 - 0.5 * 4.9), abs=0.01)
+    assert track.width_m == pytest.approx(1.8)
+
+
+def test_unknown_ego_motion_inflates_the_position_sigma() -> None:
+    # confirm_frames = 1: a tentative track would end at its first miss
+    params = dataclasses.replace(P, confirm_frames=1)
+    known, unknown = Tracker(params), Tracker(params)
+    for tracker in (known, unknown):
+        tracker.update([_m(20.0, 0.0)], None, DT_S)
+    a = known.update([], STILL, DT_S).tracks[0]
+    b = unknown.update([], None, DT_S).tracks[0]
+    assert b.sigma_x_m**2 == pytest.approx(a.sigma_x_m**2 + P.unknown_ego_sigma_m**2)
+    assert b.sigma_y_m**2 == pytest.approx(a.sigma_y_m**2 + P.unknown_ego_sigma_m**2)
+
+
+@pytest.mark.parametrize("dyaw_rad", [math.pi / 2, math.pi / 4, -0.3])
+def test_an_ego_turn_turns_the_position_covariance(dyaw_rad: float) -> None:
+    # A vehicle track is born with variances (radar_sigma_x_m^2, vision_sigma_y_m^2); with
+    # dt = 0 nothing is added, so after the car turns in place by dyaw the track sees the
+    # same ellipse turned by -dyaw: var_x = cos^2 a + sin^2 b, var_y = sin^2 a + cos^2 b.
+    tracker = Tracker(dataclasses.replace(P, confirm_frames=1))
+    tracker.update([_m(20.0, 0.0)], None, 0.0)
+    (track,) = tracker.update([], EgoMotion(0.0, 0.0, dyaw_rad, 0.0), 0.0).tracks
+    c2, s2 = math.cos(dyaw_rad) ** 2, math.sin(dyaw_rad) ** 2
+    a, b = P.radar_sigma_x_m**2, P.vision_sigma_y_m**2
+    assert (track.x_m, track.y_m) == pytest.approx(
+        (20.0 * math.cos(dyaw_rad), -20.0 * math.sin(dyaw_rad)), abs=1e-12
+    )
+    assert track.sigma_x_m**2 == pytest.approx(c2 * a + s2 * b, abs=1e-12)
+    assert track.sigma_y_m**2 == pytest.approx(s2 * a + c2 * b, abs=1e-12)
+    assert track.history_m == ((track.x_m, track.y_m),) * 2
+
+
+def test_measurement_sigma_per_kind_at_birth() -> None:
+    # A new track's position covariance is the measurement's.
+    result = Tracker(P).update(
+        [
+            _m(20.0, 0.0, 0, "vehicle"),
+            _m(20.0, 0.0, 0, "pedestrian", 0.6),
+            _m(2.0, 0.0, 1, "pedestrian", 0.6),
+            _m(20.0, 5.0, 0, "guard_rail", 0.0),
+        ],
+        None,
+        DT_S,
+    )
+    sigmas = [(t.kind, t.sigma_x_m, t.sigma_y_m) for t in result.tracks]
+    assert sigmas == [
+        ("vehicle", P.radar_sigma_x_m, P.vision_sigma_y_m),
+        ("pedestrian", pytest.approx(0.1 * 20.0), P.vision_sigma_y_m),
+        ("pedestrian", P.pedestrian_min_sigma_x_m, P.vision_sigma_y_m),
+        ("guard_rail", P.radar_sigma_x_m, P.guard_rail_sigma_y_m),
+    ]
+
+
+# --- lifecycle --------------------------------------------------------------------------------
+
+
+def test_a_detection_missing_for_one_frame_keeps_its_track_and_id() -> None:
+    tracker = Tracker(P)
+    seen = []
+    for k in range(10):
+        result = tracker.update([] if k == 5 else [_m(20.0, 1.0)], STILL, DT_S)
+        (track,) = result.tracks
+        seen.append(track.id)
+        assert result.ended == ()
+        if k == 5:
+            assert (track.misses, track.source_index, track.confirmed) == (1, None, True)
+            assert confirmed_sources(result, "vehicle") == frozenset()
+    assert seen == [1] * 10
+    assert (track.hits, track.misses, track.age) == (9, 0, 10)
+
+
+def test_a_confirmed_track_is_kept_through_max_missed_frames_then_ended() -> None:
+    tracker = Tracker(P)
+    for _ in range(P.confirm_frames):
+        tracker.update([_m(20.0, 1.0)], STILL, DT_S)
+    for misses in range(1, P.max_missed_frames + 1):
+        (track,) = tracker.update([], STILL, DT_S).tracks
+        assert track.misses == misses
+    result = tracker.update([], STILL, DT_S)
+    assert result == TrackResult((), (1,))
+    # ids are never reused
+    assert tracker.update([_m(20.0, 1.0)], STILL, DT_S).tracks[0].id == 2
+
+
+def test_confirmation_after_confirm_frames_hits() -> None:
+    tracker = Tracker(P)
+    flags = [tracker.update([_m(20.0, 1.0)], STILL, DT_S).tracks[0].confirmed for _ in range(4)]
+    assert flags == [False, False, True, True]  # confirm_frames = 3
+    once = Tracker(dataclasses.replace(P, confirm_frames=1))
+    assert once.update([_m(20.0, 1.0)], STILL, DT_S).tracks[0].confirmed
+
+
+def test_a_one_frame_false_positive_is_never_confirmed_and_is_ended() -> None:
+    tracker = Tracker(P)
+    for k in range(8):
+        ghost = [_m(40.0, -5.0, 1)] if k == 4 else []
+        result = tracker.update([_m(20.0, 1.0), *ghost], STILL, DT_S)
+        if k == 4:
+            fp = _by_source(result)[1]
+            assert (fp.id, fp.confirmed) == (2, False)
+            assert confirmed_sources(result, "vehicle") == frozenset({0})
+        if k == 5:
+            assert result.ended == (2,)
+        assert [t.id for t in result.confirmed] == ([1] if k >= P.confirm_frames - 1 else [])
+    assert [t.id for t in result.tracks] == [1]
+
+
+def test_two_pedestrians_crossing_keep_their_ids() -> None:
+    # Same distance, opposite lateral speeds, crossing at y = 0 at t = 2.05 s (between frames).
+    rng = np.random.default_rng(3)
+    tracker = Tracker(P)
+    ids: list[tuple[int, int]] = []
+    for k in range(41):
+        t_s = k * DT_S
+        y_a = 3.075 - 1.5 * t_s
+        noise = rng.normal(0.0, (0.2, 0.02, 0.2, 0.02))
+        walkers = [
+            _m(15.0 + noise[0], y_a + noise[1], 0, "pedestrian", 0.6),
+            _m(15.0 + noise[2], -y_a + noise[3], 1, "pedestrian", 0.6),
+        ]
+        result = tracker.update(walkers, STILL, DT_S)
+        tracks = _by_source(result, "pedestrian")
+        ids.append((tracks[0].id, tracks[1].id))
+    assert set(ids) == {(1, 2)}
+    a, b = result.of_kind("pedestrian")
+    assert a.y_m < -2.5 < 2.5 < b.y_m
+    assert (a.vy_mps, b.vy_mps) == pytest.approx((-1.5, 1.5), abs=0.2)
+
+
+def test_kinds_never_associate_with_each_other() -> None:
+    tracker = Tracker(P)
+    for _ in range(3):
+        tracker.update([_m(20.0, 0.0)], STILL, DT_S)
+    result = tracker.update(
+        [_m(20.0, 0.0, 0, "guard_rail", 0.0), _m(20.0, 0.0, 0, "pedestrian", 0.6)], STILL, DT_S
+    )
+    kinds = [(t.id, t.kind, t.source_index, t.confirmed) for t in result.tracks]
+    assert kinds == [
+        (1, "vehicle", None, True),
+        (2, "guard_rail", 0, False),
+        (3, "pedestrian", 0, False),
+    ]
+    assert result.of_kind("vehicle") == (result.tracks[0],)
+    assert result.of_kind("guard_rail") == ()
+    assert confirmed_sources(result, "vehicle") == frozenset()
+
+
+def test_the_gate_cap_in_metres_splits_far_detections() -> None:
+    tracker = Tracker(P)
+    tracker.update([_m(20.0, 0.0)], STILL, DT_S)
+    result = tracker.update([_m(20.0 + P.gate_m + 0.1, 0.0)], STILL, DT_S)
+    assert result.ended == (1,)
+    assert [t.id for t in result.tracks] == [2]
+
+
+def test_a_fast_lead_car_is_kept_from_its_second_frame() -> None:
+    # Both cars at 30 m/s: the lead car stays 40 m ahead, but its new track (speed 0) predicts
+    # it 3 m nearer on the second frame, beyond a 2 m cap and inside the default gate.
+    ego = step(30.0, 0.0, DT_S)
+    tracker = Tracker(P)
+    results = [tracker.update([_m(40.0, 0.0)], ego, DT_S) for _ in range(5)]
+    assert [r.tracks[0].id for r in results] == [1] * 5
+    (track,) = results[-1].tracks
+    assert track.confirmed and track.vx_mps == pytest.approx(30.0, abs=3.0)
+    narrow = Tracker(dataclasses.replace(P, gate_m=2.0))
+    narrow.update([_m(40.0, 0.0)], ego, DT_S)
+    assert narrow.update([_m(40.0, 0.0)], ego, DT_S).ended == (1,)
+
+
+def test_guard_rail_verdicts_are_confirmed_by_time_correlation() -> None:
+    # A rail post seen every frame while driving; a slow vehicle mislabelled once is not.
+    ego = step(10.0, 0.0, DT_S)
+    tracker = Tracker(P)
+    for k in range(4):
+        rail = _m(30.0 - 1.0 * k, 6.0, 0, "guard_rail", 0.0)
+        once = [_m(15.0, -2.0, 1, "guard_rail", 0.0)] if k == 3 else []
+        result = tracker.update([rail, *once], ego, DT_S)
+        expected = {0} if k >= P.confirm_frames - 1 else set()
+        assert confirmed_sources(result, "guard_rail") == expected
+
+
+def test_reset_restarts_ids_and_replays_identically() -> None:
+    rng = np.random.default_rng(11)
+    frames = [
+        [_m(20.0 + rng.normal(0, 0.3), rng.normal(0, 0.1), j) for j in range(int(rng.integers(3)))]
+        for _ in range(15)
+    ]
+    egos = [None if k % 5 == 0 else step(12.0, 0.1, DT_S) for k in range(15)]
+    tracker = Tracker(P)
+    first = [tracker.update(f, e, DT_S) for f, e in zip(frames, egos, strict=True)]
+    tracker.reset()
+    second = [tracker.update(f, e, DT_S) for f, e in zip(frames, egos, strict=True)]
+    assert second == first
+    assert min(t.id for r in first for t in r.tracks) == 1
+
+
+def test_empty_measurements_and_zero_dt() -> None:
+    tracker = Tracker(P)
+    assert tracker.update([], None, DT_S) == TrackResult((), ())
+    assert tracker.update([], STILL, 0.0) == TrackResult((), ())
+    tracker.update([_m(20.0, 0.0)], STILL, 0.0)
+    (track,) = tracker.update([_m(20.0, 0.0)], STILL, 0.0).tracks
+    assert (track.x_m, track.y_m, track.hits) == (pytest.approx(20.0), pytest.approx(0.0), 2)
+
+
+# --- the assignment ---------------------------------------------------------------------------
+
+
+def _brute_force(cost: np.ndarray) -> tuple[int, float]:
+    """Most allowed pairs, then least cost, over every partial matching."""
+    rows, cols = cost.shape
+    best = (0, 0.0)
+    for choice in itertools.product([None, *range(cols)], repeat=rows):
+        used = [c for c in choice if c is not None]
+        if len(set(used)) != len(used):
+            continue
+        pairs = [(r, c) for r, c in enumerate(choice) if c is not None]
+        if any(not math.isfinite(cost[r, c]) for r, c in pairs):
+            continue
+        total = float(sum(cost[r, c] for r, c in pairs))
+        if len(pairs) > best[0] or (len(pairs) == best[0] and total < best[1]):
+            best = (len(pairs), total)
+    return best
+
+
+def test_assignment_equals_brute_force_on_random_small_matrices() -> None:
+    rng = np.random.default_rng(2024)
+    for _ in range(400):
+        shape = (int(rng.integers(0, 6)), int(rng.integers(0, 6)))
+        cost = rng.uniform(0.0, 10.0, shape)
+        cost[rng.random(shape) < rng.uniform(0.0, 0.7)] = np.inf
+        pairs = solve_assignment(cost)
+        rows = [r for r, _ in pairs]
+        cols = [c for _, c in pairs]
+        assert rows == sorted(set(rows)) and len(set(cols)) == len(cols)
+        assert all(math.isfinite(cost[r, c]) for r, c in pairs)
+        count, total = _brute_force(cost)
+        assert len(pairs) == count
+        assert sum(cost[r, c] for r, c in pairs) == pytest.approx(total, abs=1e-9)
+
+
+def test_assignment_prefers_the_global_optimum_to_greedy() -> None:
+    # Greedy takes (0, 0) = 1 and leaves row 1 to column 1 = 10; optimal: 2 + 2.
+    cost = np.array([[1.0, 2.0], [2.0, 10.0]])
+    assert solve_assignment(cost) == ((0, 1), (1, 0))
+    assert solve_assignment(np.full((2, 3), np.inf)) == ()
+    assert solve_assignment(np.zeros((0, 3))) == ()
+
+
+def test_assignment_rejects_bad_costs() -> None:
+    with pytest.raises(ValueError, match=r"^cost: "):
+        solve_assignment(np.array([[np.nan]]))
+    with pytest.raises(ValueError, match=r"^cost: "):
+        solve_assignment(np.zeros(3))
+
+
+# --- bad input --------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("change", "field"),
+    [
+        ({"kind": "car"}, "kind"),
+        ({"x_m": math.nan}, "x_m"),
+        ({"y_m": math.inf}, "y_m"),
+        ({"width_m": -0.1}, "width_m"),
+        ({"box_px": (10.0, 0.0, 5.0, 5.0)}, "box_px"),
+        ({"box_px": (0.0, 0.0, math.nan, 5.0)}, "box_px"),
+        ({"box_px": (0.0, 0.0, 5.0)}, "box_px"),
+        ({"source_index": -1}, "source_index"),
+    ],
+)
+def test_bad_measurement_names_the_field(change: dict[str, object], field: str) -> None:
+    good = {"kind": "vehicle", "x_m": 20.0, "y_m": 0.0, "width_m": 1.8}
+    good |= {"box_px": (0.0, 0.0, 1.0, 1.0), "source_index": 0}
+    with pytest.raises(ValueError, match=f"^{field}: expected"):
+        Measurement(**(good | change))  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("dt_s", [-0.1, math.nan, math.inf])
+def test_bad_dt_names_dt_s(dt_s: float) -> None:
+    with pytest.raises(ValueError, match=r"^dt_s: expected"):
+        Tracker(P).update([], None, dt_s)
+
+
+def test_duplicate_source_index_and_unknown_kind_are_rejected() -> None:
+    with pytest.raises(ValueError, match=r"^measurements: .*'vehicle', 0\) appears twice"):
+        Tracker(P).update([_m(20.0, 0.0), _m(30.0, 0.0)], None, DT_S)
+    # the same index in two kinds is fine: each kind has its own list
+    Tracker(P).update([_m(20.0, 0.0), _m(20.0, 0.0, 0, "pedestrian")], None, DT_S)
+    with pytest.raises(ValueError, match=r"^kind: expected one of vehicle, pedestrian"):
+        TrackResult((), ()).of_kind("car")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("confirm_frames", 0),
+        ("max_missed_frames", -1),
+        ("gate_m", 0.0),
+        ("gate_chi2", math.nan),
+        ("vehicle_accel_psd_m2ps3", -1.0),
+        ("pedestrian_accel_psd_m2ps3", 0.0),
+        ("guard_rail_accel_psd_m2ps3", -0.1),
+        ("radar_sigma_x_m", 0.0),
+        ("vision_sigma_y_m", -0.3),
+        ("guard_rail_sigma_y_m", math.inf),
+        ("pedestrian_sigma_x_fraction", 0.0),
+        ("pedestrian_min_sigma_x_m", 0.0),
+        ("width_sigma_m", 0.0),
+        ("width_walk_m2ps", -0.01),
+        ("initial_velocity_sigma_mps", 0.0),
+        ("unknown_ego_sigma_m", math.nan),
+        ("history_length", 0),
+    ],
+)
+def test_bad_tracking_params_name_the_field(field: str, value: float) -> None:
+    with pytest.raises(ParamsError, match=f"^{field}: expected"):
+        TrackingParams(**{field: value})  # type: ignore[arg-type]
+    assert TrackingParams(guard_rail_accel_psd_m2ps3=0.0, unknown_ego_sigma_m=0.0)
