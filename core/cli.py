@@ -24,9 +24,13 @@ class ProgressBar:
     def __init__(self, label: str, width: int = 40) -> None:
         self.label = label
         self.width = width
+        self._drawn = -1
 
     def __call__(self, done: int, total: int) -> None:
         filled = self.width * done // max(total, 1)
+        if filled == self._drawn and done < total:
+            return  # redrawn when the bar grows: a log of it stays short
+        self._drawn = filled
         bar = "#" * filled + "." * (self.width - filled)
         end = "\n" if done >= total else ""
         sys.stderr.write(f"\r{self.label} [{bar}] {done}/{total}{end}")
@@ -305,6 +309,41 @@ def _cmd_info(args: argparse.Namespace) -> int:
             print(format_report(drive_report(drive)))
     except RecordingError as err:
         print(f"fusionscope info: {err}", file=sys.stderr)
+        return 2
+    return 0
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    import json
+
+    from core.engine import FusionEngine
+    from core.io.drive import Drive
+    from core.io.errors import RecordingError
+    from core.params import Params, ParamsError, load_params
+    from core.results import frame_record
+
+    out_path: Path | None = args.out
+    try:
+        params = load_params(args.params) if args.params else Params()
+        if out_path is not None and not out_path.parent.is_dir():
+            raise _UsageError(f"--out {out_path}: the folder {out_path.parent} does not exist")
+        with Drive(args.recording) as drive:
+            engine = FusionEngine(params, drive.camera)
+            progress = ProgressBar(f"run {drive.path.name}")
+            partial = None if out_path is None else out_path.with_name(out_path.name + ".partial")
+            sink = sys.stdout if partial is None else partial.open("w", encoding="utf-8")
+            try:
+                for i in range(len(drive)):
+                    record = frame_record(engine.process(drive.frame(i)))
+                    sink.write(json.dumps(record, separators=(",", ":")) + "\n")
+                    progress(i + 1, len(drive))
+            finally:
+                if sink is not sys.stdout:
+                    sink.close()
+            if partial is not None and out_path is not None:
+                partial.replace(out_path)  # a complete file or none: never half a drive
+    except (RecordingError, ParamsError, _UsageError, OSError) as err:
+        print(f"fusionscope run: {err}", file=sys.stderr)
         return 2
     return 0
 
@@ -648,6 +687,20 @@ def build_parser() -> argparse.ArgumentParser:
         help="build the index from the files even when a cached one is valid",
     )
     info.set_defaults(func=_cmd_info)
+
+    run = sub.add_parser(
+        "run",
+        help="run the whole pipeline over a recording and write per-frame results",
+        description=(
+            "Process every frame of a recording with the fusion engine (pitch, motion "
+            "stereo, guard-rail filter, vehicles, pedestrians, tracking) and write one JSON "
+            "object per frame: boxes, classes, world positions, pitch, stage timings."
+        ),
+    )
+    run.add_argument("recording", type=Path, help="a recording folder")
+    run.add_argument("--params", type=Path, help="parameter file (default: the papers')")
+    run.add_argument("--out", type=Path, help="JSON-lines file to write (default: standard output)")
+    run.set_defaults(func=_cmd_run)
 
     from core.bench import STAGES
 

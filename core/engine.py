@@ -1,0 +1,272 @@
+"""The whole pipeline of paper 000 for one frame, and the state it carries across frames.
+
+`FusionEngine.process(frame)` runs, in the order of paper 000's fig. 1:
+
+1. pitch (II-A), with the previous frame's horizon memory and its vehicle boxes left out;
+2. the camera model for this frame (the calibrated camera with the detected pitch);
+3. motion stereo (II-B) on the bird's-eye view, with the car's motion since the last frame;
+4. the search areas of the radar targets, and the guard-rail filter on the slow ones
+   (paper 002);
+5. vehicle detection by symmetry on the others (II-C, paper 001);
+6. pedestrian detection with both fusion filters (II-D);
+7. tracking of vehicles, pedestrians and guard-rail targets (`core.tracking`, beyond the
+   papers).
+
+The engine is the only module that knows this order. It owns what crosses frames: the pitch
+memory, the previous frame's vehicle boxes, motion stereo's background and the tracker.
+`process` expects frames in order; `seek(drive, index)` brings the engine to any frame of a
+drive by resetting that state and replaying the `replay_window(params)` frames before it.
+
+Replay tolerance (what a seek reproduces of playing the drive from its start):
+    - motion stereo's background forgets a frame after `frames_to_forget` frames up to half
+      a grey level (`core.motion_stereo`); the window is at least that long, so the
+      obstacle mask agrees except where a cell's mean sits on the threshold;
+    - the tracker restarts: its ids differ from a playback's, and a track confirmed before
+      the window is confirmed again within `confirm_frames` of its start; a track older
+      than the window carries less history and a less settled velocity;
+    - pitch's horizon tracking and the vehicle boxes it leaves out depend on one frame
+      back, and are rebuilt by the first replayed frame.
+    `tests/core/test_engine.py` checks these on a bundled drive.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Protocol, TypeVar
+
+from core.camera import CameraModel
+from core.guardrail import GuardRailResult, detect_guard_rails
+from core.io.frame import FrameInput
+from core.motion_stereo import MotionStereo, MotionStereoResult, frames_to_forget
+from core.params import Params
+from core.pedestrian import PedestrianResult, detect_pedestrians
+from core.pitch import PitchMemory, PitchResult, detect_pitch
+from core.search_area import SearchArea, search_areas
+from core.tracking import Measurement, Track, Tracker, TrackResult, confirmed_sources
+from core.vehicle import VehicleResult, detect_vehicles
+
+NS_PER_S = 1_000_000_000
+MS_PER_S = 1000.0
+# A background whose weights never forget (frames_to_forget None) is rebuilt from this many
+# frames on a seek.
+LONGEST_REPLAY_FRAMES = 200
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class StageTimings:
+    """Milliseconds each stage took on this frame (wall clock, one thread)."""
+
+    pitch_ms: float
+    motion_stereo_ms: float
+    guardrail_ms: float  # search areas included
+    vehicle_ms: float
+    pedestrian_ms: float
+    tracking_ms: float
+
+    @property
+    def total_ms(self) -> float:
+        return (
+            self.pitch_ms
+            + self.motion_stereo_ms
+            + self.guardrail_ms
+            + self.vehicle_ms
+            + self.pedestrian_ms
+            + self.tracking_ms
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class FrameResult:
+    """Everything the engine found on one frame, with every stage's intermediates.
+
+    camera: this frame's camera (calibration with the detected pitch); areas: the radar
+    targets' search areas; vehicle, pedestrian: the papers' per-frame detections;
+    tracking: every live track after this frame; tracked_vehicles / tracked_pedestrians:
+    the confirmed tracks of each kind; tracked_guard_rails: indices of this frame's radar
+    targets labelled guard rail and associated with a confirmed guard-rail track;
+    replayed: frames processed before this one to rebuild the state (0 when it followed
+    the previous frame).
+    """
+
+    index: int
+    t_ns: int
+    camera: CameraModel
+    pitch: PitchResult
+    motion_stereo: MotionStereoResult
+    areas: tuple[SearchArea, ...]
+    guardrail: GuardRailResult
+    vehicle: VehicleResult
+    pedestrian: PedestrianResult
+    tracking: TrackResult
+    timings: StageTimings
+    replayed: int
+
+    @property
+    def tracked_vehicles(self) -> tuple[Track, ...]:
+        return self.tracking.of_kind("vehicle")
+
+    @property
+    def tracked_pedestrians(self) -> tuple[Track, ...]:
+        return self.tracking.of_kind("pedestrian")
+
+    @property
+    def tracked_guard_rails(self) -> frozenset[int]:
+        return confirmed_sources(self.tracking, "guard_rail")
+
+
+class Frames(Protocol):
+    """What `FusionEngine.seek` reads: a drive's frames by index (`core.io.drive.Drive`)."""
+
+    def __len__(self) -> int: ...
+
+    def frame(self, i: int) -> FrameInput: ...
+
+
+def replay_window(params: Params) -> int:
+    """Frames a seek replays before the wanted one: long enough for motion stereo's
+    background to forget the frames before it and for a track to be confirmed again."""
+    forget = frames_to_forget(params.motion_stereo)
+    tracking = params.tracking.confirm_frames + params.tracking.max_missed_frames
+    return max(LONGEST_REPLAY_FRAMES if forget is None else forget, tracking)
+
+
+def _timed(run: Callable[[], T]) -> tuple[T, float]:
+    start = time.perf_counter()
+    out = run()
+    return out, (time.perf_counter() - start) * MS_PER_S
+
+
+def _measurements(
+    vehicle: VehicleResult,
+    pedestrian: PedestrianResult,
+    areas: tuple[SearchArea, ...],
+    guard_rails: frozenset[int],
+) -> list[Measurement]:
+    """This frame's detections as the tracker's measurements: vehicles at the radar's
+    distance with vision's lateral position and width, kept pedestrians where their base
+    meets the road, guard-rail targets at the radar's position."""
+    out = [
+        Measurement("vehicle", v.distance_m, v.lateral_m, v.width_m, v.box_px, i)
+        for i, v in enumerate(vehicle.vehicles)
+    ]
+    out += [
+        Measurement("pedestrian", p.distance_m, p.lateral_m, p.width_m, p.extended_box_px, i)
+        for i, p in enumerate(pedestrian.candidates)
+        if p.verdict == "pedestrian"
+    ]
+    for a in sorted(areas, key=lambda a: a.target_index):
+        if a.target_index in guard_rails:
+            u0, v0, u1, v1 = a.box_px
+            box = (float(u0), float(v0), float(u1), float(v1))
+            out.append(
+                Measurement("guard_rail", a.target.x_m, a.target.y_m, 0.0, box, a.target_index)
+            )
+    return out
+
+
+class FusionEngine:
+    """Paper 000's system on one drive: `process` one frame after the other, or `seek`.
+
+    camera: the drive's calibrated camera (its pitch is the calibrated one; each frame's
+    detected pitch replaces it for that frame).
+    """
+
+    def __init__(self, params: Params, camera: CameraModel) -> None:
+        self.params = params
+        self.camera = camera
+        self._motion_stereo = MotionStereo(params.motion_stereo)
+        self._tracker = Tracker(params.tracking)
+        self._pitch_memory: PitchMemory | None = None
+        self._vehicle_boxes: list[tuple[float, float, float, float]] = []
+        self._last: FrameInput | None = None
+
+    @property
+    def last_index(self) -> int | None:
+        """Index of the frame processed last (None after a reset)."""
+        return None if self._last is None else self._last.index
+
+    def reset(self) -> None:
+        """Forget every cross-frame state: the next frame is processed as a drive's first."""
+        self._motion_stereo.reset()
+        self._tracker.reset()
+        self._pitch_memory = None
+        self._vehicle_boxes = []
+        self._last = None
+
+    def seek(self, frames: Frames, index: int) -> FrameResult:
+        """The result of frame `index` of `frames`: processed next when it follows the last
+        frame, otherwise after a reset and a replay of up to `replay_window` frames."""
+        if not 0 <= index < len(frames):
+            raise ValueError(f"index: expected a frame 0..{len(frames) - 1}, got {index}")
+        if self.last_index is not None and index == self.last_index + 1:
+            return self.process(frames.frame(index))
+        self.reset()
+        first = max(0, index - replay_window(self.params))
+        for i in range(first, index):
+            self.process(frames.frame(i))
+        result = self.process(frames.frame(index))
+        return replace(result, replayed=index - first)
+
+    def process(self, frame: FrameInput) -> FrameResult:
+        """One frame, the stages in the paper's order (module docstring). A frame that does
+        not follow the last one (its index is not the next) starts over without history."""
+        if self._last is not None and frame.index != self._last.index + 1:
+            self.reset()
+        p = self.params
+        image = frame.image
+        pitch, pitch_ms = _timed(
+            lambda: detect_pitch(
+                image, self.camera, p.pitch, self._pitch_memory, self._vehicle_boxes
+            )
+        )
+        camera = self.camera.with_pitch(pitch.pitch_rad)
+        ego = frame.ego if self._last is not None else None
+        motion, motion_ms = _timed(lambda: self._motion_stereo.update(image, camera, ego))
+
+        def guard() -> tuple[tuple[SearchArea, ...], GuardRailResult]:
+            areas = search_areas(image, camera, frame.radar, p.vehicle)
+            return areas, detect_guard_rails(areas, frame.speed_mps, p.guardrail)
+
+        (areas, rails), rails_ms = _timed(guard)
+        vehicle, vehicle_ms = _timed(
+            lambda: detect_vehicles(areas, frame.radar, camera, p.vehicle, rails.guard_rail_targets)
+        )
+        boxes = [v.box_px for v in vehicle.vehicles]
+        pedestrian, pedestrian_ms = _timed(
+            lambda: detect_pedestrians(
+                image,
+                camera,
+                motion.image_mask,
+                motion.image_mask_first_row_px,
+                boxes,
+                p.pedestrian,
+            )
+        )
+        dt_s = 0.0 if self._last is None else (frame.t_ns - self._last.t_ns) / NS_PER_S
+        measurements = _measurements(vehicle, pedestrian, areas, rails.guard_rail_targets)
+        tracks, tracking_ms = _timed(
+            lambda: self._tracker.update(measurements, ego, max(dt_s, 0.0))
+        )
+        self._pitch_memory = pitch.memory
+        self._vehicle_boxes = boxes
+        self._last = frame
+        return FrameResult(
+            index=frame.index,
+            t_ns=frame.t_ns,
+            camera=camera,
+            pitch=pitch,
+            motion_stereo=motion,
+            areas=areas,
+            guardrail=rails,
+            vehicle=vehicle,
+            pedestrian=pedestrian,
+            tracking=tracks,
+            timings=StageTimings(
+                pitch_ms, motion_ms, rails_ms, vehicle_ms, pedestrian_ms, tracking_ms
+            ),
+            replayed=0,
+        )

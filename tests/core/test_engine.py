@@ -1,0 +1,148 @@
+"""The fusion engine on the bundled drives: stage order, seeking, and `fusionscope run`.
+
+Replay tolerance (core.engine): after a seek, a frame's per-frame detections (pitch,
+vehicles, guard-rail labels, pedestrian verdicts) are those of a playback from the start,
+and its motion-stereo obstacle mask differs only in cells at the threshold. Tracks are
+rebuilt from the replayed window, so their ids restart and tracks kept alive by
+intermittent detections may differ; most confirmed tracks still have a counterpart.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+
+import numpy as np
+import pytest
+
+from core.cli import DEFAULT_RECORDINGS, main
+from core.engine import FrameResult, FusionEngine, replay_window
+from core.io.drive import Drive
+from core.params import Params
+from tests.core.playback import playback
+
+SEEK_DRIVE = "stop_and_go"  # the car brakes, stands and drives on: every mode of the stages
+SEEK_STEP = 15  # frames between the seeks compared with the playback
+MASK_AGREEMENT = 0.999  # share of obstacle cells a seek reproduces
+TRACK_MATCH_M = 1.0  # a confirmed track of the playback has a seek counterpart this close
+TRACK_AGREEMENT = 0.7  # share of the playback's confirmed tracks with such a counterpart
+
+
+def _playback(name: str) -> tuple[FrameResult, ...]:
+    return tuple(result for result, _ in playback(name))
+
+
+def _seek(name: str, index: int) -> FrameResult:
+    with Drive(DEFAULT_RECORDINGS / name) as drive:
+        return FusionEngine(Params(), drive.camera).seek(drive, index)
+
+
+def test_played_frames_follow_each_other() -> None:
+    played = _playback(SEEK_DRIVE)
+    assert [r.index for r in played] == list(range(len(played)))
+    assert all(r.replayed == 0 for r in played)
+    assert played[0].motion_stereo.mode == "first_frame"
+    assert played[1].motion_stereo.mode != "first_frame"
+    for r in played:
+        t = r.timings
+        parts = (
+            t.pitch_ms,
+            t.motion_stereo_ms,
+            t.guardrail_ms,
+            t.vehicle_ms,
+            t.pedestrian_ms,
+            t.tracking_ms,
+        )
+        assert all(x >= 0 for x in parts)
+        assert t.total_ms == pytest.approx(sum(parts))
+        # the frame's camera carries the pitch found on it
+        assert r.camera.extrinsics.pitch_rad == r.pitch.pitch_rad
+
+
+def test_a_seek_reproduces_the_playback_within_the_replay_tolerance(
+    report: Callable[[str], None],
+) -> None:
+    played = _playback(SEEK_DRIVE)
+    window = replay_window(Params())
+    matched = total = 0
+    for i in range(0, len(played), SEEK_STEP):
+        a, b = played[i], _seek(SEEK_DRIVE, i)
+        assert b.index == i and b.replayed == min(i, window)
+        assert b.pitch.pitch_rad == a.pitch.pitch_rad
+        same = np.mean(a.motion_stereo.obstacles == b.motion_stereo.obstacles)
+        assert same >= MASK_AGREEMENT
+        assert [v.box_px for v in b.vehicle.vehicles] == [v.box_px for v in a.vehicle.vehicles]
+        assert b.guardrail.guard_rail_targets == a.guardrail.guard_rail_targets
+        assert [(c.extended_box_px, c.verdict) for c in b.pedestrian.candidates] == [
+            (c.extended_box_px, c.verdict) for c in a.pedestrian.candidates
+        ]
+        for t in a.tracking.confirmed:
+            total += 1
+            matched += any(
+                u.kind == t.kind and np.hypot(u.x_m - t.x_m, u.y_m - t.y_m) <= TRACK_MATCH_M
+                for u in b.tracking.confirmed
+            )
+    report(
+        f"engine seek on {SEEK_DRIVE} (window {window} frames): {matched}/{total} confirmed "
+        "tracks of the playback rebuilt"
+    )
+    assert matched >= TRACK_AGREEMENT * total
+
+
+def test_seeking_the_next_frame_processes_just_it() -> None:
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        engine = FusionEngine(Params(), drive.camera)
+        assert engine.seek(drive, 40).replayed == replay_window(Params())
+        nxt = engine.seek(drive, 41)
+        assert nxt.replayed == 0 and nxt.motion_stereo.mode != "first_frame"
+        assert engine.seek(drive, 0).replayed == 0
+        # a frame out of order starts over
+        jumped = engine.process(drive.frame(90))
+        assert jumped.motion_stereo.mode == "first_frame"
+        assert jumped.tracking.tracks == () or all(t.age == 1 for t in jumped.tracking.tracks)
+        with pytest.raises(ValueError, match="index"):
+            engine.seek(drive, len(drive))
+
+
+def test_fusionscope_run_writes_a_line_per_frame(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    out = tmp_path / "results.jsonl"
+    assert main(["run", str(DEFAULT_RECORDINGS / SEEK_DRIVE), "--out", str(out)]) == 0
+    lines = out.read_text().splitlines()
+    played = _playback(SEEK_DRIVE)
+    assert len(lines) == len(played)
+    for line, r in zip(lines, played, strict=True):
+        record = json.loads(line)
+        assert record["frame"] == r.index and record["t_ns"] == r.t_ns
+        assert record["pitch_rad"] == pytest.approx(r.pitch.pitch_rad, abs=1e-6)
+        assert len(record["vehicles"]) == len(r.vehicle.vehicles)
+        assert [p["verdict"] for p in record["pedestrians"]] == [
+            c.verdict for c in r.pedestrian.candidates
+        ]
+        assert {t["id"] for t in record["tracks"]} == {t.id for t in r.tracking.confirmed}
+        assert set(record["timings_ms"]) >= {"pitch", "pedestrian", "tracking", "total"}
+    assert not (tmp_path / "results.jsonl.partial").exists()
+
+
+def test_fusionscope_run_says_what_is_wrong(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    assert main(["run", str(tmp_path / "nowhere")]) == 2
+    assert "nowhere" in capsys.readouterr().err
+    out = tmp_path / "missing" / "results.jsonl"
+    assert main(["run", str(DEFAULT_RECORDINGS / SEEK_DRIVE), "--out", str(out)]) == 2
+    assert "missing" in capsys.readouterr().err
+    bad = tmp_path / "params.yaml"
+    bad.write_text("pedestrian:\n  gap_fraction: 3.0\n")
+    assert main(["run", str(DEFAULT_RECORDINGS / SEEK_DRIVE), "--params", str(bad)]) == 2
+    assert "gap_fraction" in capsys.readouterr().err
+
+
+def test_the_engine_runs_the_real_rav4_frame(rav4) -> None:  # type: ignore[no-untyped-def]
+    with Drive(rav4) as drive:
+        result = FusionEngine(Params(), drive.camera).seek(drive, 0)
+    # the silver car ahead (test_bundled_vehicles) is a vehicle, no pedestrian is near it
+    (car,) = [v for v in result.vehicle.vehicles if abs(v.lateral_m) < 1.5]
+    for c in result.pedestrian.kept:
+        assert not (car.box_px[0] <= c.axis_px <= car.box_px[2]), c
+    width = drive.camera.intrinsics.width_px
+    for c in result.pedestrian.candidates:
+        assert 0 <= c.axis_px < width
+    assert result.tracking.confirmed == ()  # one frame confirms nothing
