@@ -37,6 +37,7 @@ from dataclasses import dataclass, replace
 from typing import Protocol, TypeVar
 
 from core.camera import CameraModel
+from core.ego import NS_PER_S
 from core.guardrail import GuardRailResult, detect_guard_rails
 from core.io.frame import FrameInput
 from core.motion_stereo import MotionStereo, MotionStereoResult, frames_to_forget
@@ -47,7 +48,6 @@ from core.search_area import SearchArea, search_areas
 from core.tracking import Measurement, Track, Tracker, TrackResult, confirmed_sources
 from core.vehicle import VehicleResult, detect_vehicles
 
-NS_PER_S = 1_000_000_000
 MS_PER_S = 1000.0
 # A background whose weights never forget (frames_to_forget None) is rebuilt from this many
 # frames on a seek.

@@ -457,13 +457,13 @@ def _extents(
 ) -> IntArray:
     """Step 4's row scans for each candidate i on the strip's signed edges (strip rows).
 
-    From row start[i] up to up_stop[i], rows holding an edge in columns col0[i] .. col1[i]
-    (exclusive) continue the body until gap[i] rows hold none; from start[i] down to
-    down_stop[i] (exclusive) the same gives the feet, and symmetric rows (at least two edges,
-    `fraction` of them mirrored about column axis2[i] / 2 by an edge of opposite sign
-    within MIRROR_TOLERANCE_PX) give the bottom of the symmetric area. Returns (N, 4): top
-    row, 1 when the body still went on at up_stop, the feet's and the symmetric area's last
-    rows (start[i] - 1 when none)."""
+    A row is symmetric when, between columns col0[i] and col1[i] (exclusive), it holds at
+    least two edges and `fraction` of them are mirrored about column axis2[i] / 2 by an edge
+    of opposite sign within MIRROR_TOLERANCE_PX. From row start[i] up to up_stop[i],
+    symmetric rows continue the body until gap[i] rows are not; from start[i] down to
+    down_stop[i] (exclusive) they give the bottom of the symmetric area, and rows holding
+    any edge the feet. Returns (N, 4): top row, 1 when the body still went on at up_stop,
+    the feet's and the symmetric area's last rows (start[i] - 1 when none)."""
     out = np.empty((len(start), 4), dtype=np.int64)
     for i in range(len(start)):
         c0, c1, a2 = col0[i], col1[i], axis2[i]
