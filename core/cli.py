@@ -92,6 +92,12 @@ class _UsageError(Exception):
     """A combination of flags that does not go together; the message names them."""
 
 
+def _check_out_folder(out: Path) -> None:
+    """ValueError naming --out when the folder it would be written into does not exist."""
+    if not out.parent.is_dir():
+        raise ValueError(f"--out {out}: the folder {out.parent} does not exist")
+
+
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from core.calibrate import Chessboard, calibrate_chessboard, read_views
     from core.io.calibration import save_camera_info
@@ -99,8 +105,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 
     out = Path(args.out)
     try:
-        if not out.parent.is_dir():
-            raise ValueError(f"--out {out}: the folder {out.parent} does not exist")
+        _check_out_folder(out)
         board = Chessboard.from_text(args.board, args.square_m)
         result = calibrate_chessboard(read_views(Path(args.folder)), board)
         save_camera_info(result.intrinsics, out, camera_name=Path(args.folder).resolve().name)
@@ -319,14 +324,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from core.engine import FusionEngine
     from core.io.drive import Drive
     from core.io.errors import RecordingError
-    from core.params import Params, ParamsError, load_params
+    from core.params import Params, load_params
     from core.results import frame_record
 
     out_path: Path | None = args.out
     try:
         params = load_params(args.params) if args.params else Params()
-        if out_path is not None and not out_path.parent.is_dir():
-            raise _UsageError(f"--out {out_path}: the folder {out_path.parent} does not exist")
+        if out_path is not None:
+            _check_out_folder(out_path)
         with Drive(args.recording) as drive:
             engine = FusionEngine(params, drive.camera)
             progress = ProgressBar(f"run {drive.path.name}")
@@ -342,7 +347,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
                     sink.close()
             if partial is not None and out_path is not None:
                 partial.replace(out_path)  # a complete file or none: never half a drive
-    except (RecordingError, ParamsError, _UsageError, OSError) as err:
+    except (RecordingError, ValueError, OSError) as err:
         print(f"fusionscope run: {err}", file=sys.stderr)
         return 2
     return 0

@@ -20,6 +20,7 @@ from core.engine import FrameResult
 from core.io.groundtruth import FrameTruth, TruthObject
 from core.params import Params
 from core.pedestrian import Verdict
+from core.search_area import intersection_area, rect_area
 from tests.core.playback import playback
 
 IOU_MATCH = 0.3
@@ -39,10 +40,8 @@ STAGES: dict[str, tuple[Verdict, ...]] = {
 
 
 def _iou(a: Box, b: Box) -> float:
-    shared = max(0.0, min(a[2], b[2]) - max(a[0], b[0])) * max(
-        0.0, min(a[3], b[3]) - max(a[1], b[1])
-    )
-    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - shared
+    shared = intersection_area(a, b)
+    union = rect_area(a) + rect_area(b) - shared
     return shared / union if union > 0 else 0.0
 
 
