@@ -62,6 +62,7 @@ Notes:
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Literal, TypeVar
@@ -176,8 +177,8 @@ class MotionStereoResult:
     T_prevgrid_grid: (2, 3) float64 affine map from this frame's grid cells (col, row) to the
     previous frame's (identity on "first_frame" and "restarted"); H_image_grid: (3, 3)
     float64 homography from grid cells to full-image ideal pixels of this frame's camera.
-    ego: the motion used (None on "first_frame" and "restarted"); regions: D's connected
-    regions of at least params.min_region_m2, nearest first.
+    ego: the motion used (None on "first_frame" and "restarted"); min_region_cells: the
+    smallest region `regions` reports, in cells (params.min_region_m2).
     """
 
     mode: Mode
@@ -194,7 +195,13 @@ class MotionStereoResult:
     next_background: U8Array
     image_mask: U8Array
     image_mask_first_row_px: int
-    regions: tuple[ObstacleRegion, ...]
+    min_region_cells: int
+
+    @functools.cached_property
+    def regions(self) -> tuple[ObstacleRegion, ...]:
+        """D's 8-connected regions of at least min_region_cells, nearest first; labelled on
+        first use, as no later stage needs them (a quarter of the stage's time)."""
+        return _regions(self)
 
 
 # --- polygons -------------------------------------------------------------------------------
@@ -364,10 +371,6 @@ class MotionStereo:
         sum_16u = n * n * MAX_GREY <= np.iinfo(np.uint16).max
         self._sum_depth = cv2.CV_16U if sum_16u else cv2.CV_32F
         self._window_sum = np.empty((rows, cols), dtype=np.uint16 if sum_16u else np.float32)
-        # 8-connected regions are at most one per 2x2 block: 16-bit labels (half the memory
-        # traffic of 32-bit ones) while they fit
-        most_labels = ((rows + 1) // 2) * ((cols + 1) // 2) + 1
-        self._label_type = cv2.CV_16U if most_labels <= np.iinfo(np.uint16).max else cv2.CV_32S
         cells = params.min_region_m2 / params.cell_m**2
         self._min_region_cells = max(1, math.ceil(cells - AREA_SLACK_CELLS))
         self._background: U8Array | None = None
@@ -503,7 +506,6 @@ class MotionStereo:
                 borderMode=cv2.BORDER_CONSTANT,
                 borderValue=0,
             )
-        regions = self._regions(obstacles, H_image_grid, camera)
 
         self._background = _frozen(next_background)
         self._background_poly = poly_a
@@ -522,69 +524,75 @@ class MotionStereo:
             next_background=next_background,
             image_mask=_frozen(image_mask),
             image_mask_first_row_px=first,
-            regions=regions,
+            min_region_cells=self._min_region_cells,
         )
 
-    def _regions(
-        self, obstacles: U8Array, H_image_grid: FloatArray, camera: CameraModel
-    ) -> tuple[ObstacleRegion, ...]:
-        """D's 8-connected regions of at least min_region_m2, nearest first."""
-        col0, row0, width, height = cv2.boundingRect(obstacles)
-        if width == 0 or height == 0:
-            return ()
-        col_stop, row_stop = col0 + width, row0 + height
-        # Grana's block-based labelling: a third of the default's time with statistics
-        count, _, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
-            obstacles[row0:row_stop, col0:col_stop], 8, self._label_type, cv2.CCL_GRANA
+
+def _regions(result: MotionStereoResult) -> tuple[ObstacleRegion, ...]:
+    """D's 8-connected regions of at least result.min_region_cells, nearest first."""
+    obstacles, H_image_grid = result.obstacles, result.H_image_grid
+    rows, cols = obstacles.shape
+    # 8-connected regions are at most one per 2x2 block: 16-bit labels (half the memory
+    # traffic of 32-bit ones) while they fit
+    most_labels = ((rows + 1) // 2) * ((cols + 1) // 2) + 1
+    label_type = cv2.CV_16U if most_labels <= np.iinfo(np.uint16).max else cv2.CV_32S
+    col0, row0, width, height = cv2.boundingRect(obstacles)
+    if width == 0 or height == 0:
+        return ()
+    col_stop, row_stop = col0 + width, row0 + height
+    # Grana's block-based labelling: a third of the default's time with statistics
+    count, _, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
+        obstacles[row0:row_stop, col0:col_stop], 8, label_type, cv2.CCL_GRANA
+    )
+    if count <= 1:
+        return ()
+    stats = stats[1:]
+    stats = stats[stats[:, cv2.CC_STAT_AREA] >= result.min_region_cells]
+    if len(stats) == 0:
+        return ()
+    stats = stats[np.argsort(-(stats[:, cv2.CC_STAT_TOP] + stats[:, cv2.CC_STAT_HEIGHT]))]
+    c0 = stats[:, cv2.CC_STAT_LEFT] + col0
+    r0 = stats[:, cv2.CC_STAT_TOP] + row0
+    c1 = c0 + stats[:, cv2.CC_STAT_WIDTH]
+    r1 = r0 + stats[:, cv2.CC_STAT_HEIGHT]
+    # The grid box's four corners (cell edges: cell (c, r) spans c - 0.5 .. c + 0.5) in
+    # the image, as (4, N) u and v.
+    cols_e = np.concatenate([c0, c1, c1, c0]) - 0.5
+    rows_e = np.concatenate([r0, r0, r1, r1]) - 0.5
+    hom = H_image_grid[:, :2] @ np.stack([cols_e, rows_e]) + H_image_grid[:, 2:]
+    u = (hom[0] / hom[2]).reshape(4, -1)
+    v = (hom[1] / hom[2]).reshape(4, -1)
+    first = result.image_mask_first_row_px
+    stop = first + result.image_mask.shape[0]
+    u_hi = result.image_mask.shape[1] - 1.0
+    boxes_px = np.stack(
+        [
+            np.clip(u.min(axis=0), 0.0, u_hi),
+            np.clip(v.min(axis=0), first, stop - 1.0),
+            np.clip(u.max(axis=0), 0.0, u_hi),
+            np.clip(v.max(axis=0), first, stop - 1.0),
+        ],
+        axis=1,
+    )
+    g, cell = result.grid, result.grid.cell_m
+    return tuple(
+        ObstacleRegion(
+            cells=n,
+            area_m2=n * cell * cell,
+            grid_box_cells=(a, b, c, d),
+            x_min_m=g.x_max_m - d * cell,
+            x_max_m=g.x_max_m - b * cell,
+            y_min_m=g.y_max_m - c * cell,
+            y_max_m=g.y_max_m - a * cell,
+            box_px=(bu0, bv0, bu1, bv1),
         )
-        if count <= 1:
-            return ()
-        stats = stats[1:]
-        stats = stats[stats[:, cv2.CC_STAT_AREA] >= self._min_region_cells]
-        if len(stats) == 0:
-            return ()
-        stats = stats[np.argsort(-(stats[:, cv2.CC_STAT_TOP] + stats[:, cv2.CC_STAT_HEIGHT]))]
-        c0 = stats[:, cv2.CC_STAT_LEFT] + col0
-        r0 = stats[:, cv2.CC_STAT_TOP] + row0
-        c1 = c0 + stats[:, cv2.CC_STAT_WIDTH]
-        r1 = r0 + stats[:, cv2.CC_STAT_HEIGHT]
-        # The grid box's four corners (cell edges: cell (c, r) spans c - 0.5 .. c + 0.5) in
-        # the image, as (4, N) u and v.
-        cols_e = np.concatenate([c0, c1, c1, c0]) - 0.5
-        rows_e = np.concatenate([r0, r0, r1, r1]) - 0.5
-        hom = H_image_grid[:, :2] @ np.stack([cols_e, rows_e]) + H_image_grid[:, 2:]
-        u = (hom[0] / hom[2]).reshape(4, -1)
-        v = (hom[1] / hom[2]).reshape(4, -1)
-        first, stop = camera.row_window_px
-        u_hi = camera.intrinsics.width_px - 1.0
-        boxes_px = np.stack(
-            [
-                np.clip(u.min(axis=0), 0.0, u_hi),
-                np.clip(v.min(axis=0), first, stop - 1.0),
-                np.clip(u.max(axis=0), 0.0, u_hi),
-                np.clip(v.max(axis=0), first, stop - 1.0),
-            ],
-            axis=1,
+        for n, a, b, c, d, (bu0, bv0, bu1, bv1) in zip(
+            stats[:, cv2.CC_STAT_AREA].tolist(),
+            c0.tolist(),
+            r0.tolist(),
+            c1.tolist(),
+            r1.tolist(),
+            boxes_px.tolist(),
+            strict=True,
         )
-        g, cell = self.grid, self.grid.cell_m
-        return tuple(
-            ObstacleRegion(
-                cells=n,
-                area_m2=n * cell * cell,
-                grid_box_cells=(a, b, c, d),
-                x_min_m=g.x_max_m - d * cell,
-                x_max_m=g.x_max_m - b * cell,
-                y_min_m=g.y_max_m - c * cell,
-                y_max_m=g.y_max_m - a * cell,
-                box_px=(bu0, bv0, bu1, bv1),
-            )
-            for n, a, b, c, d, (bu0, bv0, bu1, bv1) in zip(
-                stats[:, cv2.CC_STAT_AREA].tolist(),
-                c0.tolist(),
-                r0.tolist(),
-                c1.tolist(),
-                r1.tolist(),
-                boxes_px.tolist(),
-                strict=True,
-            )
-        )
+    )
