@@ -89,20 +89,23 @@ def test_a_standing_person_is_found_with_the_right_box() -> None:
 def test_legs_that_break_the_symmetry_are_extended_down_to_the_road() -> None:
     image, labels = _scene("person")
     empty, _ = _scene("empty")
-    _, v0, _, v1 = _truth_box(labels)
-    # legs lost against the road (trousers of its grey): background below the hands
+    u0, v0, u1, v1 = (round(x) for x in _truth_box(labels))
+    # mid-stride: below the hands one leg stands upright, the other swings outwards
     hands = round(v1 - 0.45 * (v1 - v0))
-    no_legs = image.copy()
-    no_legs[hands:] = empty[hands:]
-    result = _detect(no_legs)
+    axis, leg = (u0 + u1) // 2, max(3, round(0.15 * (u1 - u0)))
+    walking = image.copy()
+    walking[hands:v1, u0 - 2 : u1 + 2] = empty[hands:v1, u0 - 2 : u1 + 2]
+    for row in range(hands, v1):
+        swing = axis + 2 + round(2 * leg * (row - hands) / (v1 - hands))
+        walking[row, axis - 2 - leg : axis - 2] = 40
+        walking[row, swing : swing + leg] = 40
+    result = _detect(walking)
     (found,) = result.kept
     assert found.extended
-    assert found.box_px[3] <= hands + 2  # the symmetric area ends with the body
-    # down to the road where the band that found it stands its person: with the legs
-    # gone the image cannot tell a nearer person from a taller, farther one
-    assert found.extended_box_px[3] == result.bands.foot_row_px[found.band]
+    assert found.box_px[3] < v1 - PARAMS.gap_fraction * (v1 - v0)  # symmetry ends above
+    assert found.extended_box_px[3] == pytest.approx(v1, abs=2)  # down to the feet
     assert found.extended_box_px[1] == pytest.approx(v0, abs=2)
-    assert PARAMS.min_height_m <= found.height_m <= PARAMS.max_height_m
+    assert found.height_m == pytest.approx(PERSON_HEIGHT_M, rel=0.05)
 
 
 @pytest.mark.parametrize(
