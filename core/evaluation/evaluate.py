@@ -1,0 +1,263 @@
+"""One recording played through the engine and scored against its ground truth.
+
+`evaluate_recording` runs `FusionEngine` over every frame, in order, and scores each frame
+that has ground truth (frames without it are not counted at all, neither as hits nor as
+misses) with `vehicles` and `objects`, and the tracked output with `mot`. `total` adds
+recordings together; events are per recording (a vehicle id is a recording's own), so the
+total's events are the sum of the recordings'.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from core.engine import FrameResult, FusionEngine
+from core.io.drive import Drive
+from core.io.frame import FrameInput
+from core.io.groundtruth import FrameTruth
+from core.params import Params
+from core.pedestrian import Verdict
+from core.tracking import Track
+
+from . import objects, vehicles
+from .mot import MotAccumulator, MotScore
+from .objects import BoxScore, MaskScore, PitchScore, RailScore
+from .vehicles import Estimate, EventStats, FrameStats, FrameVehicles
+
+# the pedestrian outputs compared: the detector alone (its candidates that passed the size
+# and perspective constraints), after the motion-stereo filter, after the vehicle filter
+PEDESTRIAN_STAGES: dict[str, tuple[Verdict, ...]] = {
+    "symmetry": ("pedestrian", "motion_stereo", "vehicle"),
+    "motion_stereo": ("pedestrian", "vehicle"),
+    "vehicles": ("pedestrian",),
+}
+
+Progress = Callable[[int, int], None]
+
+
+@dataclass(frozen=True)
+class TrackingReport:
+    """Tracked output scored as the per-frame detections are, plus CLEAR-MOT and IDF1."""
+
+    vehicles: FrameStats
+    events: EventStats
+    pedestrians: BoxScore
+    guardrails: RailScore
+    vehicle_mot: MotScore
+    pedestrian_mot: MotScore
+
+
+@dataclass(frozen=True)
+class RecordingReport:
+    """Every figure of one recording (or a total: name "total")."""
+
+    name: str
+    frames: int  # frames with ground truth, the ones scored
+    vehicles: FrameStats
+    events: EventStats
+    guardrails: RailScore
+    pedestrians: dict[str, BoxScore]  # PEDESTRIAN_STAGES
+    motion_stereo: MaskScore
+    pitch: PitchScore
+    tracking: TrackingReport
+    events_by_recording: tuple[tuple[str, EventStats], ...] = field(default=())
+
+
+def _vehicle_estimates(result: FrameResult) -> list[Estimate]:
+    return [
+        Estimate(v.distance_m, v.lateral_m, v.width_m, v.target_indices)
+        for v in result.vehicle.vehicles
+    ]
+
+
+def _track_estimates(result: FrameResult) -> list[Estimate]:
+    found = result.vehicle.vehicles
+    return [
+        Estimate(
+            t.x_m,
+            t.y_m,
+            t.width_m,
+            () if t.source_index is None else found[t.source_index].target_indices,
+        )
+        for t in result.tracked_vehicles
+    ]
+
+
+def _truth_vehicles(truth: FrameTruth) -> list[tuple[int, objects.Box]]:
+    return [(o.id, o.box_px) for o in truth.objects if vehicles.framed(o)]
+
+
+def _truth_people(truth: FrameTruth, params: Params) -> list[tuple[int, objects.Box]]:
+    p = params.pedestrian
+    return [
+        (o.id, o.box_px)
+        for o in truth.objects
+        if objects.visible_person(o, p.min_distance_m, p.max_distance_m)
+    ]
+
+
+def _track_boxes(tracks: Sequence[Track]) -> list[tuple[int, objects.Box]]:
+    return [(t.id, t.box_px) for t in tracks]
+
+
+class _Scorer:
+    """Accumulates one recording's figures frame by frame."""
+
+    def __init__(self, params: Params) -> None:
+        self.params = params
+        self.frames = 0
+        self.vehicle_frames: list[FrameVehicles] = []
+        self.tracked_frames: list[FrameVehicles] = []
+        self.rails = RailScore()
+        self.tracked_rails = RailScore()
+        self.pedestrians = {stage: BoxScore() for stage in PEDESTRIAN_STAGES}
+        self.tracked_pedestrians = BoxScore()
+        self.mask = MaskScore()
+        self.pitch = PitchScore()
+        self.vehicle_mot = MotAccumulator()
+        self.pedestrian_mot = MotAccumulator()
+
+    def add(
+        self, frame: FrameInput, result: FrameResult, truth: FrameTruth, calibrated_rad: float
+    ) -> None:
+        p = self.params
+        i = frame.index
+        self.frames += 1
+        tolerance = p.vehicle.refined_error_m
+        self.vehicle_frames.append(
+            vehicles.score_frame(
+                i, truth.objects, frame.radar, result.areas, _vehicle_estimates(result), tolerance
+            )
+        )
+        self.tracked_frames.append(
+            vehicles.score_frame(
+                i, truth.objects, frame.radar, result.areas, _track_estimates(result), tolerance
+            )
+        )
+        rails_m = objects.rails_on_road_m(truth, result.camera.with_pitch(truth.pitch_rad))
+        checked = [c.target_index for c in result.guardrail.checks]
+        self.rails += objects.score_rails(
+            i, checked, result.guardrail.guard_rail_targets, frame.radar, truth, rails_m
+        )
+        self.tracked_rails += objects.score_rails(
+            i, checked, result.tracked_guard_rails, frame.radar, truth, rails_m
+        )
+        lo, hi = p.pedestrian.min_distance_m, p.pedestrian.max_distance_m
+        for stage, verdicts in PEDESTRIAN_STAGES.items():
+            boxes = [
+                c.extended_box_px for c in result.pedestrian.candidates if c.verdict in verdicts
+            ]
+            self.pedestrians[stage] += objects.score_pedestrians(i, boxes, truth.objects, lo, hi)
+        tracked = [t.box_px for t in result.tracked_pedestrians]
+        self.tracked_pedestrians += objects.score_pedestrians(i, tracked, truth.objects, lo, hi)
+        ms = result.motion_stereo
+        if ms.mode in ("motion_stereo", "background_subtraction"):
+            self.mask += objects.score_mask(
+                i,
+                ms.image_mask,
+                ms.image_mask_first_row_px,
+                truth,
+                p.motion_stereo,
+                ms.mode == "background_subtraction",
+            )
+        self.pitch += objects.score_pitch(result.pitch.pitch_rad, truth.pitch_rad, calibrated_rad)
+        self.vehicle_mot.update(i, _truth_vehicles(truth), _track_boxes(result.tracked_vehicles))
+        self.pedestrian_mot.update(
+            i, _truth_people(truth, p), _track_boxes(result.tracked_pedestrians)
+        )
+
+    def report(self, name: str) -> RecordingReport:
+        events = vehicles.event_stats(self.vehicle_frames)
+        return RecordingReport(
+            name=name,
+            frames=self.frames,
+            vehicles=vehicles.frame_stats(self.vehicle_frames),
+            events=events,
+            guardrails=self.rails,
+            pedestrians=dict(self.pedestrians),
+            motion_stereo=self.mask,
+            pitch=self.pitch,
+            tracking=TrackingReport(
+                vehicles=vehicles.frame_stats(self.tracked_frames),
+                events=vehicles.event_stats(self.tracked_frames),
+                pedestrians=self.tracked_pedestrians,
+                guardrails=self.tracked_rails,
+                vehicle_mot=self.vehicle_mot.score(),
+                pedestrian_mot=self.pedestrian_mot.score(),
+            ),
+            events_by_recording=((name, events),),
+        )
+
+
+def evaluate_recording(
+    path: Path | str, params: Params, progress: Progress | None = None
+) -> RecordingReport:
+    """Play the recording at `path` through the engine and score it (module docstring).
+    RecordingError when it cannot be read; ValueError when it has no ground truth."""
+    with Drive(path) as drive:
+        if not drive.has_truth:
+            raise ValueError(
+                f"{drive.path}: expected a groundtruth.json to evaluate against, found none"
+            )
+        engine = FusionEngine(params, drive.camera)
+        scorer = _Scorer(params)
+        calibrated = drive.camera.extrinsics.pitch_rad
+        for i in range(len(drive)):
+            frame = drive.frame(i)
+            result = engine.process(frame)
+            truth = drive.truth(i)
+            if truth is not None:
+                scorer.add(frame, result, truth, calibrated)
+            if progress is not None:
+                progress(i + 1, len(drive))
+        return scorer.report(drive.path.name)
+
+
+def _sum_tracking(a: TrackingReport, b: TrackingReport) -> TrackingReport:
+    return TrackingReport(
+        vehicles=a.vehicles + b.vehicles,
+        events=a.events + b.events,
+        pedestrians=a.pedestrians + b.pedestrians,
+        guardrails=a.guardrails + b.guardrails,
+        vehicle_mot=_sum_mot(a.vehicle_mot, b.vehicle_mot),
+        pedestrian_mot=_sum_mot(a.pedestrian_mot, b.pedestrian_mot),
+    )
+
+
+def _sum_mot(a: MotScore, b: MotScore) -> MotScore:
+    return MotScore(
+        a.truth + b.truth,
+        a.hypotheses + b.hypotheses,
+        a.matches + b.matches,
+        a.misses + b.misses,
+        a.false_positives + b.false_positives,
+        a.id_switches + b.id_switches,
+        a.iou_sum + b.iou_sum,
+        a.idtp + b.idtp,
+        (),  # frame indices belong to their recordings
+    )
+
+
+def total(reports: Sequence[RecordingReport]) -> RecordingReport:
+    """The recordings' figures added up; frame listings stay with their recordings."""
+    if not reports:
+        raise ValueError("reports: expected at least one recording's report, got none")
+    first, *rest = reports
+    out = first
+    for r in rest:
+        out = RecordingReport(
+            name="total",
+            frames=out.frames + r.frames,
+            vehicles=out.vehicles + r.vehicles,
+            events=out.events + r.events,
+            guardrails=out.guardrails + r.guardrails,
+            pedestrians={k: out.pedestrians[k] + r.pedestrians[k] for k in out.pedestrians},
+            motion_stereo=out.motion_stereo + r.motion_stereo,
+            pitch=out.pitch + r.pitch,
+            tracking=_sum_tracking(out.tracking, r.tracking),
+            events_by_recording=out.events_by_recording + r.events_by_recording,
+        )
+    return dataclasses.replace(out, name="total")

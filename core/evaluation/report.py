@@ -1,0 +1,417 @@
+"""The evaluation's figures as plain-text tables in the papers' layout, markdown, CSV or JSON.
+
+`as_json` holds every figure: {"recordings": [{"name": ..., <figures>}], "total": {<figures>}}
+with <figures> = {"frames", "vehicles": {"frames": {rd, fn, rfn, fp, nvo, framed, and where
+each FN, RFN, FP, NVO happened as [frame, id] pairs}, "events": {events, radar_miss,
+not_refined, refined, refined_share, refined_share_of_radar_supplied}}, "guardrails",
+"pedestrians" (per filter: symmetry, motion_stereo, vehicles), "motion_stereo", "pitch",
+"tracking"}; shares are fractions 0-1 (null when undefined). The total carries counts
+only; frame listings stay with their recordings. CSV is the same figures flattened, one
+line per recording and figure (`recording,figure,value`), listings left out.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections import defaultdict
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from .evaluate import PEDESTRIAN_STAGES, RecordingReport
+from .mot import MotScore
+from .objects import BoxScore, RailScore
+from .vehicles import EventStats, FrameStats
+
+PEDESTRIAN_TITLES = {
+    "symmetry": "symmetry alone",
+    "motion_stereo": "+ motion stereo",
+    "vehicles": "+ vehicles",
+}
+
+
+def _share(x: float) -> float | None:
+    return None if math.isnan(x) else round(x, 4)
+
+
+def _ratio(part: int, whole: int) -> float | None:
+    return round(part / whole, 4) if whole else None
+
+
+def _pairs(at: Sequence[tuple[int, int]]) -> list[list[int]]:
+    return [[frame, what] for frame, what in at]
+
+
+def _frames_json(s: FrameStats, listings: bool) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "rd": s.rd,
+        "fn": s.fn,
+        "rfn": s.rfn,
+        "fp": s.fp,
+        "nvo": s.nvo,
+        "framed": s.framed,
+        "rd_share": _ratio(s.rd, s.framed),
+        "fn_share": _ratio(s.fn, s.framed),
+        "rfn_share": _ratio(s.rfn, s.framed),
+    }
+    if listings:
+        out |= {
+            "fn_at": _pairs(s.fn_at),
+            "rfn_at": _pairs(s.rfn_at),
+            "fp_at": _pairs(s.fp_at),
+            "nvo_at": _pairs(s.nvo_at),
+        }
+    return out
+
+
+def _events_json(e: EventStats) -> dict[str, Any]:
+    return {
+        "events": e.events,
+        "radar_miss": e.radar_miss,
+        "not_refined": e.not_refined,
+        "refined": e.refined,
+        "refined_share": _share(e.refined_share) if e.events else None,
+        "refined_share_of_radar_supplied": _share(e.refined_share_of_radar_supplied)
+        if e.events - e.radar_miss
+        else None,
+    }
+
+
+def _rails_json(r: RailScore, listings: bool) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "slow_targets": r.slow_targets,
+        "rail_returns": r.rail_returns,
+        "labelled": r.labelled,
+        "fn": r.fn,
+        "fp": r.fp,
+        "vehicles_labelled": r.vehicles_labelled,
+    }
+    if listings:
+        out |= {
+            "fn_at": _pairs(r.fn_at),
+            "fp_at": _pairs(r.fp_at),
+            "vehicles_labelled_at": _pairs(r.vehicles_labelled_at),
+        }
+    return out
+
+
+def _boxes_json(b: BoxScore, listings: bool) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "visible": b.visible,
+        "found": b.found,
+        "boxes": b.boxes,
+        "true_boxes": b.true_boxes,
+        "recall": _ratio(b.found, b.visible),
+        "precision": _ratio(b.true_boxes, b.boxes),
+    }
+    if listings:
+        out |= {"missed_at": _pairs(b.missed_at), "false_at": _pairs(b.false_at)}
+    return out
+
+
+def _mot_json(m: MotScore, listings: bool) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "truth": m.truth,
+        "tracks": m.hypotheses,
+        "matches": m.matches,
+        "misses": m.misses,
+        "false_positives": m.false_positives,
+        "id_switches": m.id_switches,
+        "mota": round(m.mota, 4) if m.truth else None,
+        "motp": round(m.motp, 4) if m.matches else None,
+        "idf1": round(m.idf1, 4) if m.truth + m.hypotheses else None,
+    }
+    if listings:
+        out["id_switches_at"] = _pairs(m.switches_at)
+    return out
+
+
+def figures_json(r: RecordingReport, listings: bool = True) -> dict[str, Any]:
+    """Every figure of one report (module docstring)."""
+    ms, pitch, t = r.motion_stereo, r.pitch, r.tracking
+    return {
+        "frames": r.frames,
+        "vehicles": {
+            "frames": _frames_json(r.vehicles, listings),
+            "events": _events_json(r.events),
+        },
+        "guardrails": _rails_json(r.guardrails, listings),
+        "pedestrians": {k: _boxes_json(b, listings) for k, b in r.pedestrians.items()},
+        "motion_stereo": {
+            "obstacles": ms.obstacles,
+            "obstacles_hit": ms.obstacles_hit,
+            "object_recall": _ratio(ms.obstacles_hit, ms.obstacles),
+            "pixel_recall": _ratio(ms.truth_marked_px, ms.truth_px),
+            "pixel_precision": _ratio(ms.marked_on_objects_px, ms.marked_px),
+            **({"missed_at": _pairs(ms.missed_at)} if listings else {}),
+        },
+        "pitch": {
+            "frames": len(pitch.errors_deg),
+            "rms_deg": _share(pitch.rms_deg),
+            "max_deg": _share(pitch.max_deg),
+            "calibration_rms_deg": _share(pitch.calibration_rms_deg),
+        },
+        "tracking": {
+            "vehicles": {
+                "frames": _frames_json(t.vehicles, listings),
+                "events": _events_json(t.events),
+                "mot": _mot_json(t.vehicle_mot, listings),
+            },
+            "pedestrians": {
+                **_boxes_json(t.pedestrians, listings),
+                "mot": _mot_json(t.pedestrian_mot, listings),
+            },
+            "guardrails": _rails_json(t.guardrails, listings),
+        },
+    }
+
+
+def as_json(reports: Sequence[RecordingReport], total: RecordingReport) -> dict[str, Any]:
+    return {
+        "recordings": [{"name": r.name, **figures_json(r)} for r in reports],
+        "total": figures_json(total, listings=False),
+    }
+
+
+# --- tables ---------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Table:
+    title: str
+    header: tuple[str, ...]
+    rows: tuple[tuple[str, ...], ...]
+    notes: tuple[str, ...] = ()
+
+
+def _pct(part: int, whole: int) -> str:
+    return f"{part} ({part / whole:.0%})" if whole else str(part)
+
+
+def _rp(b: BoxScore) -> str:
+    recall = f"{b.recall:.0%}" if b.visible else "-"
+    precision = f"{b.precision:.0%}" if b.boxes else "-"
+    return f"{recall} / {precision}"
+
+
+def _runs(frames: Sequence[int]) -> str:
+    """'10-14, 20' from frame indices."""
+    runs: list[str] = []
+    seq = sorted(set(frames))
+    start = prev = seq[0]
+    for f in [*seq[1:], None]:
+        if f is not None and f == prev + 1:
+            prev = f
+            continue
+        runs.append(str(start) if start == prev else f"{start}-{prev}")
+        if f is not None:
+            start = prev = f
+    return ", ".join(runs)
+
+
+def _ranges(at: Sequence[tuple[int, int]]) -> str:
+    """'3: 10-14, 20; 5: 7' from (frame, id) pairs: the frames of each id."""
+    frames: dict[int, list[int]] = defaultdict(list)
+    for frame, what in at:
+        frames[what].append(frame)
+    return "; ".join(f"{w}: {_runs(frames[w])}" for w in sorted(frames)) or "none"
+
+
+def _frames(at: Sequence[tuple[int, int]]) -> str:
+    return _runs([frame for frame, _ in at]) if at else "none"
+
+
+def tables(reports: Sequence[RecordingReport], total: RecordingReport) -> list[Table]:
+    rows = [*reports, total] if len(reports) > 1 else list(reports)
+    out = [
+        Table(
+            "Vehicles, frame by frame (paper 001, section III)",
+            ("recording", "frames", "framed", "RD", "FN", "RFN", "FP", "NVO"),
+            tuple(
+                (
+                    r.name,
+                    str(r.frames),
+                    str(r.vehicles.framed),
+                    _pct(r.vehicles.rd, r.vehicles.framed),
+                    _pct(r.vehicles.fn, r.vehicles.framed),
+                    _pct(r.vehicles.rfn, r.vehicles.framed),
+                    str(r.vehicles.fp),
+                    str(r.vehicles.nvo),
+                )
+                for r in rows
+            ),
+        ),
+        Table(
+            "Events: vehicles framed in more than 10 frames (paper 001, table I)",
+            ("SEQUENCE", "EVENTS", "RADAR MISS", "NOT REFINED", "REFINED BY VISION"),
+            tuple(
+                (
+                    r.name,
+                    str(r.events.events),
+                    _pct(r.events.radar_miss, r.events.events),
+                    _pct(r.events.not_refined, r.events.events),
+                    _pct(r.events.refined, r.events.events),
+                )
+                for r in rows
+            ),
+            (
+                f"refined of the events radar supplied to vision: "
+                f"{_pct(total.events.refined, total.events.events - total.events.radar_miss)}",
+            ),
+        ),
+        Table(
+            "Guard rails (paper 002): slow radar targets",
+            ("recording", "slow", "rail returns", "labelled", "FN", "FP", "vehicles labelled"),
+            tuple(
+                (
+                    r.name,
+                    str(r.guardrails.slow_targets),
+                    str(r.guardrails.rail_returns),
+                    str(r.guardrails.labelled),
+                    str(r.guardrails.fn),
+                    str(r.guardrails.fp),
+                    str(r.guardrails.vehicles_labelled),
+                )
+                for r in rows
+            ),
+        ),
+        Table(
+            "Pedestrians (paper 000), recall / precision",
+            ("recording", "visible", *(PEDESTRIAN_TITLES[k] for k in PEDESTRIAN_STAGES), "tracked"),
+            tuple(
+                (
+                    r.name,
+                    str(r.pedestrians["symmetry"].visible),
+                    *(_rp(r.pedestrians[k]) for k in PEDESTRIAN_STAGES),
+                    _rp(r.tracking.pedestrians),
+                )
+                for r in rows
+            ),
+        ),
+        Table(
+            "Motion stereo and pitch",
+            (
+                "recording",
+                "obstacles found",
+                "pixel recall",
+                "pixel precision",
+                "pitch RMS deg",
+                "pitch max deg",
+                "calibration RMS deg",
+            ),
+            tuple(
+                (
+                    r.name,
+                    _pct(r.motion_stereo.obstacles_hit, r.motion_stereo.obstacles),
+                    f"{r.motion_stereo.pixel_recall:.0%}",
+                    f"{r.motion_stereo.pixel_precision:.0%}",
+                    f"{r.pitch.rms_deg:.2f}",
+                    f"{r.pitch.max_deg:.2f}",
+                    f"{r.pitch.calibration_rms_deg:.2f}",
+                )
+                for r in rows
+            ),
+        ),
+        Table(
+            "Tracking (beyond the papers)",
+            (
+                "recording",
+                "vehicles RD / FN / RFN",
+                "events refined",
+                "vehicles MOTA / MOTP / IDF1",
+                "id switches",
+                "pedestrians MOTA / MOTP / IDF1",
+                "id switches",
+            ),
+            tuple(
+                (
+                    r.name,
+                    _counts(r.tracking.vehicles),
+                    _pct(r.tracking.events.refined, r.tracking.events.events),
+                    _mot(r.tracking.vehicle_mot),
+                    str(r.tracking.vehicle_mot.id_switches),
+                    _mot(r.tracking.pedestrian_mot),
+                    str(r.tracking.pedestrian_mot.id_switches),
+                )
+                for r in rows
+            ),
+        ),
+    ]
+    for r in reports:
+        out.append(
+            Table(
+                f"Where the errors are in {r.name} (frame indices per truth id or radar target)",
+                ("what", "where"),
+                (
+                    ("vehicle FN (truth id: frames)", _ranges(r.vehicles.fn_at)),
+                    ("vehicle RFN (truth id: frames)", _ranges(r.vehicles.rfn_at)),
+                    ("vehicle FP (radar target: frames)", _ranges(r.vehicles.fp_at)),
+                    ("guard-rail FN (radar target: frames)", _ranges(r.guardrails.fn_at)),
+                    ("guard-rail FP (radar target: frames)", _ranges(r.guardrails.fp_at)),
+                    (
+                        "pedestrians missed after both filters (truth id: frames)",
+                        _ranges(r.pedestrians["vehicles"].missed_at),
+                    ),
+                    (
+                        "pedestrian FP after both filters (frames)",
+                        _frames(r.pedestrians["vehicles"].false_at),
+                    ),
+                ),
+            )
+        )
+    return out
+
+
+def _counts(s: FrameStats) -> str:
+    return f"{s.rd} / {s.fn} / {s.rfn}"
+
+
+def _mot(m: MotScore) -> str:
+    if not m.truth:
+        return "-"
+    return f"{m.mota:.2f} / {m.motp:.2f} / {m.idf1:.2f}"
+
+
+def format_text(items: Sequence[Table]) -> str:
+    blocks = []
+    for t in items:
+        widths = [max(len(row[k]) for row in (t.header, *t.rows)) for k in range(len(t.header))]
+        lines = [t.title]
+        for row in (t.header, *t.rows):
+            lines.append("  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)))
+        lines += list(t.notes)
+        blocks.append("\n".join(line.rstrip() for line in lines))
+    return "\n\n".join(blocks) + "\n"
+
+
+def format_markdown(items: Sequence[Table]) -> str:
+    blocks = []
+    for t in items:
+        lines = [f"**{t.title}**", "", "| " + " | ".join(t.header) + " |"]
+        lines.append("| " + " | ".join("---" for _ in t.header) + " |")
+        lines += ["| " + " | ".join(c.replace("|", "/") for c in row) + " |" for row in t.rows]
+        lines += ["", *t.notes] if t.notes else []
+        blocks.append("\n".join(lines))
+    return "\n\n".join(blocks) + "\n"
+
+
+def _flatten(prefix: str, value: Any, out: list[tuple[str, Any]]) -> None:
+    if isinstance(value, dict):
+        for k, v in value.items():
+            _flatten(f"{prefix}.{k}" if prefix else k, v, out)
+    elif not isinstance(value, list):
+        out.append((prefix, value))
+
+
+def format_csv(reports: Sequence[RecordingReport], total: RecordingReport) -> str:
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(("recording", "figure", "value"))
+    for r in [*reports, total]:
+        flat: list[tuple[str, Any]] = []
+        _flatten("", figures_json(r, listings=False), flat)
+        for name, value in flat:
+            writer.writerow((r.name, name, "" if value is None else value))
+    return buffer.getvalue()

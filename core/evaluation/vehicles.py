@@ -1,0 +1,262 @@
+"""Paper 001's vehicle statistics (section III): frame-based RD, FN, RFN, FP, NVO, and events.
+
+Paper 001 defines, per frame:
+- RD  vehicles detected by radar and validated and refined by vision;
+- FN  vehicles detected by radar but not validated or not correctly refined by vision;
+- RFN vehicles not detected by radar or detected with a too low precision, made precise as
+      "vehicles not contained, or not entirely contained, in any search area";
+- FP  not-vehicle obstacles detected by radar and validated by vision;
+- NVO not-vehicle obstacles detected by radar and not validated by vision;
+and "refined" as position and size "with an error lower than 40 centimeters".
+
+Here, on each frame:
+- A *framed* vehicle is a truth car, van or truck less than MAX_OCCLUSION hidden, 0 to
+  MAX_DISTANCE_M ahead. Each framed vehicle gets exactly one of RD, FN, RFN:
+  - RD when an estimate (a detected vehicle, or a confirmed track for tracked output) lies
+    within `refined_error_m` of it in distance (to its near face), lateral position and
+    width;
+  - otherwise RFN when no search area contains it entirely: across, the area's sides
+    (at its target's distance) enclose the vehicle's width; in depth, the area's target
+    lies on the vehicle (from ON_VEHICLE_MARGIN_M before its near face to as far behind
+    it, past its length);
+  - otherwise FN.
+- Every radar target with a search area (a target supplied to vision) that lies on no truth
+  vehicle (framed or not: a return from a hidden car is not a not-vehicle obstacle) is an
+  FP when an estimate came from it and an NVO when none did (a target the guard-rail
+  filter labelled is one vision did not validate).
+
+Where the paper is ambiguous, and what was chosen:
+- It counts a vehicle either refined or not contained, never both. A vehicle refined by an
+  estimate although no area contains it entirely (the box may overshoot the area by less
+  than the tolerance) counts RD: radar supplied it and vision refined it.
+- "Refined" tolerances apply to the distance, the lateral centre and the width, each
+  below `refined_error_m` (paper: "position and size").
+- An event is "a vehicle present in more than 10 frames": more than EVENT_MIN_FRAMES frames
+  in which it is framed, consecutive or not. It is a radar miss when no frame of it has an
+  area containing it (RFN on all), refined by vision when at least one frame is RD, else
+  not refined. Shares: refined / events, and refined / (events - radar misses), paper 001's
+  "73 % of objects supplied to vision".
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal, Protocol
+
+from core.io.frame import RadarTarget
+from core.io.groundtruth import TruthObject
+
+VEHICLE_CLASSES = ("car", "van", "truck")
+MAX_OCCLUSION = 0.5  # a vehicle hidden this much or more is not framed
+MAX_DISTANCE_M = 60.0  # beyond this no vehicle is framed
+ON_VEHICLE_MARGIN_M = 0.5  # a radar point this close to a vehicle's footprint lies on it
+EVENT_MIN_FRAMES = 10  # an event is a vehicle framed in more than this many frames
+
+VehicleVerdict = Literal["rd", "fn", "rfn"]
+ObstacleVerdict = Literal["fp", "nvo"]
+
+
+class Area(Protocol):
+    """What the statistics read of a search area (core.search_area.SearchArea)."""
+
+    @property
+    def target_index(self) -> int: ...
+    @property
+    def y_left_m(self) -> float: ...
+    @property
+    def y_right_m(self) -> float: ...
+    @property
+    def x_m(self) -> float: ...
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A vehicle the system reports: a detection, or a confirmed track for tracked output.
+    distance_m: radar distance of its near face; lateral_m: centre, positive left;
+    target_indices: the radar targets it came from."""
+
+    distance_m: float
+    lateral_m: float
+    width_m: float
+    target_indices: tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class FrameVehicles:
+    """One frame's verdicts: (truth id, verdict) per framed vehicle and (radar target index,
+    verdict) per supplied target on no vehicle."""
+
+    index: int
+    vehicles: tuple[tuple[int, VehicleVerdict], ...]
+    obstacles: tuple[tuple[int, ObstacleVerdict], ...]
+
+
+@dataclass(frozen=True)
+class FrameStats:
+    """Frame-based counts over a drive, with (frame index, truth id) of every FN and RFN and
+    (frame index, radar target index) of every FP and NVO."""
+
+    rd: int
+    fn: int
+    rfn: int
+    fp: int
+    nvo: int
+    fn_at: tuple[tuple[int, int], ...]
+    rfn_at: tuple[tuple[int, int], ...]
+    fp_at: tuple[tuple[int, int], ...]
+    nvo_at: tuple[tuple[int, int], ...]
+
+    @property
+    def framed(self) -> int:
+        return self.rd + self.fn + self.rfn
+
+    def __add__(self, other: FrameStats) -> FrameStats:
+        return FrameStats(
+            self.rd + other.rd,
+            self.fn + other.fn,
+            self.rfn + other.rfn,
+            self.fp + other.fp,
+            self.nvo + other.nvo,
+            self.fn_at + other.fn_at,
+            self.rfn_at + other.rfn_at,
+            self.fp_at + other.fp_at,
+            self.nvo_at + other.nvo_at,
+        )
+
+
+@dataclass(frozen=True)
+class EventStats:
+    """Paper 001's table I row: events, radar misses, not refined, refined by vision."""
+
+    events: int
+    radar_miss: int
+    not_refined: int
+    refined: int
+
+    @property
+    def refined_share(self) -> float:
+        return self.refined / self.events if self.events else 0.0
+
+    @property
+    def refined_share_of_radar_supplied(self) -> float:
+        supplied = self.events - self.radar_miss
+        return self.refined / supplied if supplied else 0.0
+
+    def __add__(self, other: EventStats) -> EventStats:
+        return EventStats(
+            self.events + other.events,
+            self.radar_miss + other.radar_miss,
+            self.not_refined + other.not_refined,
+            self.refined + other.refined,
+        )
+
+
+def framed(o: TruthObject) -> bool:
+    """A vehicle the statistics count on this frame."""
+    return (
+        o.cls in VEHICLE_CLASSES
+        and o.occlusion < MAX_OCCLUSION
+        and 0.0 < o.position_m[0] <= MAX_DISTANCE_M
+    )
+
+
+def lies_on(x_m: float, y_m: float, o: TruthObject) -> bool:
+    """Is the point (x_m, y_m) on vehicle o's footprint (position_m: centre of its face
+    towards the ego car; size_m: length, width, height), give or take ON_VEHICLE_MARGIN_M?"""
+    x, y, _ = o.position_m
+    length, width, _ = o.size_m
+    return (
+        x - ON_VEHICLE_MARGIN_M <= x_m <= x + length + ON_VEHICLE_MARGIN_M
+        and abs(y_m - y) <= width / 2 + ON_VEHICLE_MARGIN_M
+    )
+
+
+def _contained(o: TruthObject, areas: Sequence[Area]) -> bool:
+    _, y, _ = o.position_m
+    half = o.size_m[1] / 2
+    return any(
+        a.y_right_m <= y - half and a.y_left_m >= y + half and lies_on(a.x_m, y, o) for a in areas
+    )
+
+
+def _refined(o: TruthObject, estimates: Sequence[Estimate], tolerance_m: float) -> bool:
+    x, y, _ = o.position_m
+    return any(
+        abs(e.distance_m - x) < tolerance_m
+        and abs(e.lateral_m - y) < tolerance_m
+        and abs(e.width_m - o.size_m[1]) < tolerance_m
+        for e in estimates
+    )
+
+
+def score_frame(
+    index: int,
+    objects: Sequence[TruthObject],
+    radar: Sequence[RadarTarget],
+    areas: Sequence[Area],
+    estimates: Sequence[Estimate],
+    refined_error_m: float,
+) -> FrameVehicles:
+    """One frame's verdicts (module docstring): truth objects, the frame's radar targets,
+    the search areas built for them, and the estimates to score."""
+    vehicles: list[tuple[int, VehicleVerdict]] = []
+    for o in objects:
+        if not framed(o):
+            continue
+        verdict: VehicleVerdict
+        if _refined(o, estimates, refined_error_m):
+            verdict = "rd"
+        elif not _contained(o, areas):
+            verdict = "rfn"
+        else:
+            verdict = "fn"
+        vehicles.append((o.id, verdict))
+    all_vehicles = [o for o in objects if o.cls in VEHICLE_CLASSES]
+    validated = {i for e in estimates for i in e.target_indices}
+    obstacles: list[tuple[int, ObstacleVerdict]] = []
+    for i in sorted({a.target_index for a in areas}):
+        t = radar[i]
+        if not any(lies_on(t.x_m, t.y_m, o) for o in all_vehicles):
+            obstacles.append((i, "fp" if i in validated else "nvo"))
+    return FrameVehicles(index, tuple(vehicles), tuple(obstacles))
+
+
+def frame_stats(frames: Sequence[FrameVehicles]) -> FrameStats:
+    """Counts over frames, with where each FN, RFN, FP and NVO happened."""
+    at: dict[str, list[tuple[int, int]]] = {k: [] for k in ("rd", "fn", "rfn", "fp", "nvo")}
+    for f in frames:
+        for truth_id, verdict in f.vehicles:
+            at[verdict].append((f.index, truth_id))
+        for target, obstacle in f.obstacles:
+            at[obstacle].append((f.index, target))
+    return FrameStats(
+        rd=len(at["rd"]),
+        fn=len(at["fn"]),
+        rfn=len(at["rfn"]),
+        fp=len(at["fp"]),
+        nvo=len(at["nvo"]),
+        fn_at=tuple(at["fn"]),
+        rfn_at=tuple(at["rfn"]),
+        fp_at=tuple(at["fp"]),
+        nvo_at=tuple(at["nvo"]),
+    )
+
+
+def event_stats(frames: Sequence[FrameVehicles]) -> EventStats:
+    """Paper 001's events over one drive's frames (module docstring)."""
+    verdicts: dict[int, list[VehicleVerdict]] = defaultdict(list)
+    for f in frames:
+        for truth_id, verdict in f.vehicles:
+            verdicts[truth_id].append(verdict)
+    events = radar_miss = refined = 0
+    for seen in verdicts.values():
+        if len(seen) <= EVENT_MIN_FRAMES:
+            continue
+        events += 1
+        if "rd" in seen:
+            refined += 1
+        elif all(v == "rfn" for v in seen):
+            radar_miss += 1
+    return EventStats(events, radar_miss, events - radar_miss - refined, refined)
