@@ -1,0 +1,357 @@
+"""The evaluation's statistics on hand-made truth and detections whose figures the tests work
+out, and `fusionscope evaluate` on a bundled drive (JSON keys and types, formats, bad input).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from core.cli import DEFAULT_RECORDINGS, main
+from core.evaluation.mot import MotAccumulator
+from core.evaluation.objects import (
+    RAIL_HEIGHT_M,
+    score_mask,
+    score_pedestrians,
+    score_pitch,
+    score_rails,
+)
+from core.evaluation.vehicles import (
+    EVENT_MIN_FRAMES,
+    Estimate,
+    FrameVehicles,
+    event_stats,
+    frame_stats,
+    score_frame,
+)
+from core.io.frame import RadarTarget
+from core.io.groundtruth import FrameTruth, TruthObject
+from core.params import MotionStereoParams
+
+TOLERANCE_M = 0.4
+
+
+@dataclass(frozen=True)
+class Area:
+    target_index: int
+    x_m: float
+    y_left_m: float
+    y_right_m: float
+
+
+def car(
+    id_: int, x_m: float, y_m: float, width_m: float = 1.8, occlusion: float = 0.0
+) -> TruthObject:
+    return TruthObject(
+        id=id_,
+        cls="car",
+        box_px=(0.0, 0.0, 10.0, 10.0),
+        position_m=(x_m, y_m, 0.0),
+        size_m=(4.5, width_m, 1.5),
+        velocity_mps=(0.0, 0.0),
+        radar_seen=True,
+        occlusion=occlusion,
+    )
+
+
+def target(x_m: float, y_m: float) -> RadarTarget:
+    return RadarTarget(math.hypot(x_m, y_m), math.atan2(y_m, x_m), 0.0, 1.0, x_m, y_m)
+
+
+def area(i: int, t: RadarTarget, half_m: float = 1.25) -> Area:
+    return Area(i, t.x_m, t.y_m + half_m, t.y_m - half_m)
+
+
+# --- paper 001's frame-based statistics ------------------------------------------------------
+
+
+def _twelve_frames() -> list[FrameVehicles]:
+    """12 frames; on each, car 1 at 20 m straight ahead, car 2 at 30 m, 4 m to the left, a
+    sign at 15 m, 3 m to the right, and a hidden car 3 (70 % occluded, never counted).
+
+    - car 1: a target on its rear in every frame; refined on frames 0-5 (RD), found 1 m off on
+      6-8 (FN: not refined), not validated on 9-11 (FN);
+    - car 2: its target 1.2 m to its side (on its footprint, give or take the margin), so its
+      area does not contain it (RFN), except on frame 11 where the target is on its centre
+      and an estimate refines it (RD);
+    - the sign: a target every frame, validated by vision on frames 0-1 (FP), not on 2-11
+      (NVO);
+    - car 3's target is on a vehicle: neither FP nor NVO although it is validated.
+    """
+    frames = []
+    for i in range(12):
+        objects = [car(1, 20.0, 0.0), car(2, 30.0, 4.0), car(3, 25.0, -4.0, occlusion=0.7)]
+        t1 = target(20.5, 0.0)
+        t2 = target(31.0, 4.0 if i == 11 else 5.2)
+        sign = target(15.0, -3.0)
+        t3 = target(26.0, -4.0)
+        radar = [t1, t2, sign, t3]
+        areas = [area(k, t) for k, t in enumerate(radar)]
+        estimates = [Estimate(26.0, -4.0, 1.8, (3,))]
+        if i <= 5:
+            estimates.append(Estimate(20.1, 0.1, 1.9, (0,)))
+        elif i <= 8:
+            estimates.append(Estimate(21.0, 0.0, 1.8, (0,)))
+        if i == 11:
+            estimates.append(Estimate(30.2, 4.1, 1.7, (1,)))
+        if i <= 1:
+            estimates.append(Estimate(15.0, -3.0, 0.8, (2,)))
+        frames.append(score_frame(i, objects, radar, areas, estimates, TOLERANCE_M))
+    return frames
+
+
+def test_frame_statistics_on_a_twelve_frame_example() -> None:
+    s = frame_stats(_twelve_frames())
+    assert (s.rd, s.fn, s.rfn, s.fp, s.nvo) == (6 + 1, 6, 11, 2, 10)
+    assert s.framed == 24  # cars 1 and 2 on 12 frames; car 3 is hidden
+    assert s.fn_at == tuple((i, 1) for i in range(6, 12))
+    assert s.rfn_at == tuple((i, 2) for i in range(11))
+    assert s.fp_at == ((0, 2), (1, 2))
+    assert s.nvo_at == tuple((i, 2) for i in range(2, 12))
+
+
+def test_refined_needs_distance_lateral_and_width_each_within_the_tolerance() -> None:
+    objects, radar = [car(1, 20.0, 0.0, width_m=1.8)], [target(20.0, 0.0)]
+    areas = [area(0, radar[0])]
+
+    def verdict(e: Estimate) -> str:
+        return score_frame(0, objects, radar, areas, [e], TOLERANCE_M).vehicles[0][1]
+
+    assert verdict(Estimate(20.39, 0.39, 2.19, (0,))) == "rd"
+    assert verdict(Estimate(20.41, 0.0, 1.8, (0,))) == "fn"
+    assert verdict(Estimate(20.0, -0.41, 1.8, (0,))) == "fn"
+    assert verdict(Estimate(20.0, 0.0, 2.21, (0,))) == "fn"
+
+
+def test_a_vehicle_wider_than_the_area_is_a_radar_false_negative() -> None:
+    truck = car(1, 20.0, 0.0, width_m=2.6)  # wider than the 2.5 m area
+    radar = [target(20.0, 0.0)]
+    (verdict,) = score_frame(0, [truck], radar, [area(0, radar[0])], [], TOLERANCE_M).vehicles
+    assert verdict == (1, "rfn")
+
+
+def test_an_area_whose_target_lies_on_another_vehicle_does_not_contain_this_one() -> None:
+    near, far = car(1, 20.0, 0.0), car(2, 40.0, 0.0)
+    radar = [target(20.0, 0.0)]  # only the near car returned
+    result = score_frame(0, [near, far], radar, [area(0, radar[0])], [], TOLERANCE_M)
+    assert dict(result.vehicles) == {1: "fn", 2: "rfn"}
+
+
+# --- events (paper 001, table I) ------------------------------------------------------------
+
+
+def _frames_of(verdicts: dict[int, list[str]]) -> list[FrameVehicles]:
+    length = max(len(v) for v in verdicts.values())
+    return [
+        FrameVehicles(
+            i,
+            tuple((vid, v[i]) for vid, v in verdicts.items() if i < len(v)),
+            (),  # type: ignore[misc]
+        )
+        for i in range(length)
+    ]
+
+
+def test_an_event_is_a_vehicle_framed_in_more_than_ten_frames() -> None:
+    assert EVENT_MIN_FRAMES == 10
+    ten = {1: ["rd"] * 10}
+    eleven = {1: ["rd"] * 11}
+    assert event_stats(_frames_of(ten)).events == 0
+    assert event_stats(_frames_of(eleven)).events == 1
+
+
+def test_events_are_radar_misses_not_refined_or_refined() -> None:
+    e = event_stats(
+        _frames_of(
+            {
+                1: ["rfn"] * 12,  # radar never supplied it
+                2: ["rfn"] * 6 + ["fn"] * 6,  # supplied, never refined
+                3: ["rfn"] * 11 + ["rd"],  # refined once is refined
+                4: ["fn"] * 5 + ["rd"] * 7,
+                5: ["rd"] * 3,  # too short: no event
+            }
+        )
+    )
+    assert (e.events, e.radar_miss, e.not_refined, e.refined) == (4, 1, 1, 2)
+    assert e.refined_share == 0.5
+    assert e.refined_share_of_radar_supplied == pytest.approx(2 / 3)
+
+
+def test_the_papers_table_totals_give_its_shares() -> None:
+    # paper 001, table I: 69 events, 9 radar misses, 16 not refined, 44 refined
+    from core.evaluation.vehicles import EventStats
+
+    e = EventStats(69, 9, 16, 44)
+    assert round(e.refined_share, 2) == 0.64
+    assert round(e.refined_share_of_radar_supplied, 2) == 0.73
+
+
+# --- pedestrians, guard rails, motion stereo, pitch -------------------------------------------
+
+
+def person(id_: int, box: tuple[float, float, float, float], x_m: float = 10.0) -> TruthObject:
+    return TruthObject(
+        id_, "pedestrian", box, (x_m, 0.0, 0.0), (0.5, 0.6, 1.7), (0.0, 0.0), False, 0.0
+    )
+
+
+def test_pedestrian_recall_and_precision_at_thirty_percent_overlap() -> None:
+    truth = [person(1, (100, 100, 120, 160)), person(2, (300, 100, 320, 160), x_m=60.0)]
+    boxes = [
+        (102, 100, 122, 160),  # on person 1: IoU 18/22 > 0.3
+        (300, 100, 320, 160),  # person 2 beyond 40 m: not visible, but a true box
+        (500, 100, 520, 160),  # on nobody
+        (110, 130, 130, 190),  # IoU 100/1100 with person 1: false
+    ]
+    s = score_pedestrians(7, boxes, truth, 3.0, 40.0)
+    assert (s.visible, s.found, s.boxes, s.true_boxes) == (1, 1, 4, 2)
+    assert s.false_at == ((7, 2), (7, 3)) and s.missed_at == ()
+    assert score_pedestrians(7, [], truth, 3.0, 40.0).missed_at == ((7, 1),)
+
+
+def test_guard_rail_false_negatives_false_positives_and_vehicles_labelled() -> None:
+    rail = np.array([[5.0, -5.0], [60.0, -5.0]])  # a rail 5 m to the right
+    radar = [target(20.0, -5.2), target(30.0, -5.0), target(25.0, 0.0), target(40.0, 3.0)]
+    truth = FrameTruth(3, 0, 0.0, (car(1, 24.0, 0.0),), ())
+    labelled = frozenset({0, 2, 3})
+    s = score_rails(3, [0, 1, 2, 3], labelled, radar, truth, [rail])
+    assert (s.slow_targets, s.rail_returns, s.labelled) == (4, 2, 3)
+    assert s.fn_at == ((3, 1),)  # the rail return at 30 m was not labelled
+    assert s.fp_at == ((3, 2), (3, 3))  # the car and a target on nothing
+    assert s.vehicles_labelled_at == ((3, 2),)
+    assert RAIL_HEIGHT_M > 0
+
+
+def test_mask_recall_and_precision_on_a_hand_made_mask() -> None:
+    params = MotionStereoParams()
+    walker = TruthObject(
+        5, "pedestrian", (9.5, 109.5, 19.5, 129.5), (10.0, 0.0, 0.0), (0.5, 0.6, 1.7),
+        (1.0, 0.0), False, 0.0,
+    )  # fmt: skip
+    truth = FrameTruth(0, 0, 0.0, (walker,), ())
+    mask = np.zeros((100, 64), dtype=np.uint8)  # image rows 100..199
+    mask[10:20, 10:20] = 255  # half the walker's 10 x 20 box
+    mask[80:90, 50:60] = 255  # 100 pixels on nothing
+    s = score_mask(0, mask, 100, truth, params, still=False)
+    assert (s.obstacles, s.obstacles_hit) == (1, 1)
+    assert (s.truth_px, s.truth_marked_px) == (200, 100)
+    assert s.marked_px == 200 and s.marked_on_objects_px == 100
+    standing = score_mask(
+        0, mask, 100, FrameTruth(0, 0, 0.0, (person(6, walker.box_px),), ()), params, still=True
+    )
+    assert standing.obstacles == 0  # background subtraction cannot see a standing person
+
+
+def test_pitch_errors_in_degrees() -> None:
+    s = score_pitch(0.02, 0.01, 0.0) + score_pitch(0.0, 0.01, 0.0)
+    assert s.rms_deg == pytest.approx(math.degrees(0.01))
+    assert s.max_deg == pytest.approx(math.degrees(0.01))
+    assert s.calibration_rms_deg == pytest.approx(math.degrees(0.01))
+
+
+# --- CLEAR-MOT and IDF1 ------------------------------------------------------------------------
+
+
+def _box(u: float) -> tuple[float, float, float, float]:
+    return (u, 100.0, u + 20.0, 140.0)
+
+
+def test_perfect_tracking_scores_one() -> None:
+    acc = MotAccumulator()
+    for i in range(5):
+        acc.update(i, [(1, _box(10 * i)), (2, _box(300))], [(7, _box(10 * i)), (8, _box(300))])
+    s = acc.score()
+    assert (s.mota, s.motp, s.idf1, s.id_switches) == (1.0, 1.0, 1.0, 0)
+
+
+def test_an_id_switch_a_miss_and_a_false_positive() -> None:
+    acc = MotAccumulator()
+    # object 1 tracked by 7 on frames 0-1, by 9 on frames 2-3 (a switch on frame 2); missed on
+    # frame 4; a false track 8 far away on frame 3
+    acc.update(0, [(1, _box(0))], [(7, _box(0))])
+    acc.update(1, [(1, _box(0))], [(7, _box(0))])
+    acc.update(2, [(1, _box(0))], [(9, _box(0))])
+    acc.update(3, [(1, _box(0))], [(9, _box(0)), (8, _box(400))])
+    acc.update(4, [(1, _box(0))], [])
+    s = acc.score()
+    assert (s.truth, s.matches, s.misses, s.false_positives, s.id_switches) == (5, 4, 1, 1, 1)
+    assert s.mota == pytest.approx(1 - 3 / 5)
+    assert s.switches_at == ((2, 1),)
+    # IDF1: object 1 is given track 7 or 9 (2 frames each): IDTP 2 of 5 truth + 5 track boxes
+    assert s.idf1 == pytest.approx(2 * 2 / 10)
+
+
+def test_a_kept_match_wins_over_a_better_new_one() -> None:
+    acc = MotAccumulator()
+    acc.update(0, [(1, _box(0))], [(7, _box(0))])
+    # track 7 drifts (IoU 0.6) while track 9 sits exactly on the object: CLEAR-MOT keeps 7
+    acc.update(1, [(1, _box(0))], [(7, _box(5)), (9, _box(0))])
+    s = acc.score()
+    assert s.id_switches == 0 and s.false_positives == 1
+
+
+# --- the command ------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def stop_and_go_json() -> dict:  # type: ignore[type-arg]
+    import contextlib
+    import io
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+        assert main(["evaluate", str(DEFAULT_RECORDINGS / "stop_and_go"), "--format", "json"]) == 0
+    return json.loads(out.getvalue())  # type: ignore[no-any-return]
+
+
+def test_json_has_every_figure_with_its_type(stop_and_go_json: dict) -> None:  # type: ignore[type-arg]
+    (rec,) = stop_and_go_json["recordings"]
+    for figures in (rec, stop_and_go_json["total"]):
+        frames = figures["vehicles"]["frames"]
+        assert all(isinstance(frames[k], int) for k in ("rd", "fn", "rfn", "fp", "nvo"))
+        events = figures["vehicles"]["events"]
+        assert all(
+            isinstance(events[k], int) for k in ("events", "radar_miss", "not_refined", "refined")
+        )
+        for k in ("refined_share", "refined_share_of_radar_supplied"):
+            assert events[k] is None or 0.0 <= events[k] <= 1.0
+        assert set(figures) >= {
+            "vehicles", "guardrails", "pedestrians", "motion_stereo", "pitch", "tracking"
+        }  # fmt: skip
+        assert set(figures["pedestrians"]) == {"symmetry", "motion_stereo", "vehicles"}
+        for p in figures["pedestrians"].values():
+            assert 0.0 <= p["recall"] <= 1.0 and 0.0 <= p["precision"] <= 1.0
+        assert isinstance(figures["pitch"]["rms_deg"], float)
+        mot = figures["tracking"]["vehicles"]["mot"]
+        assert {"mota", "motp", "idf1", "id_switches"} <= set(mot)
+    assert rec["name"] == "stop_and_go" and rec["frames"] == 150
+    # every FN listed with its frame, and the listing adds up to the count
+    assert len(rec["vehicles"]["frames"]["fn_at"]) == rec["vehicles"]["frames"]["fn"]
+    assert all(len(pair) == 2 for pair in rec["vehicles"]["frames"]["fn_at"])
+    assert "fn_at" not in stop_and_go_json["total"]["vehicles"]["frames"]
+
+
+@pytest.mark.parametrize("fmt", ["table", "markdown", "csv"])
+def test_the_other_formats_print_the_papers_tables(
+    fmt: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["evaluate", str(DEFAULT_RECORDINGS / "stop_and_go"), "--format", fmt]) == 0
+    out = capsys.readouterr().out
+    if fmt == "csv":
+        assert out.startswith("recording,figure,value\n")
+        assert "stop_and_go,vehicles.frames.rd," in out
+    else:
+        assert "REFINED BY VISION" in out and "RFN" in out and "MOTA" in out
+
+
+def test_a_recording_without_ground_truth_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["evaluate", str(tmp_path / "nowhere")]) == 2
+    err = capsys.readouterr().err
+    assert "fusionscope evaluate:" in err and "nowhere" in err and "Traceback" not in err
