@@ -140,7 +140,7 @@ def _timed(run: Callable[[], T]) -> tuple[T, float]:
     return out, (time.perf_counter() - start) * MS_PER_S
 
 
-def _measurements(
+def tracker_measurements(
     vehicle: VehicleResult,
     pedestrian: PedestrianResult,
     areas: tuple[SearchArea, ...],
@@ -247,7 +247,7 @@ class FusionEngine:
             )
         )
         dt_s = 0.0 if self._last is None else (frame.t_ns - self._last.t_ns) / NS_PER_S
-        measurements = _measurements(vehicle, pedestrian, areas, rails.guard_rail_targets)
+        measurements = tracker_measurements(vehicle, pedestrian, areas, rails.guard_rail_targets)
         tracks, tracking_ms = _timed(
             lambda: self._tracker.update(measurements, ego, max(dt_s, 0.0))
         )

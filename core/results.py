@@ -8,10 +8,14 @@ full-image pixels; positions are in the vehicle frame (x forward, y left, metres
 
 from __future__ import annotations
 
+import json
 import math
-from typing import Any
+from collections.abc import Callable
+from typing import Any, TextIO
 
-from core.engine import FrameResult
+from core.camera import CameraModel
+from core.engine import FrameResult, Frames, FusionEngine
+from core.params import Params
 
 RESULTS_FORMAT_VERSION = 1
 
@@ -84,3 +88,21 @@ def frame_record(result: FrameResult) -> dict[str, Any]:
             for k in result.tracking.confirmed
         ],
     }
+
+
+def write_results(
+    drive: Frames,
+    camera: CameraModel,
+    params: Params,
+    sink: TextIO,
+    progress: Callable[[int, int], None] | None = None,
+) -> int:
+    """`fusionscope run`'s loop: every frame of `drive` through a new engine, one compact
+    JSON line each into `sink`; returns the number of frames."""
+    engine = FusionEngine(params, camera)
+    for i in range(len(drive)):
+        record = frame_record(engine.process(drive.frame(i)))
+        sink.write(json.dumps(record, separators=(",", ":")) + "\n")
+        if progress is not None:
+            progress(i + 1, len(drive))
+    return len(drive)

@@ -223,7 +223,10 @@ def _frames(at: Sequence[tuple[int, int]]) -> str:
     return _runs([frame for frame, _ in at]) if at else "none"
 
 
-def tables(reports: Sequence[RecordingReport], total: RecordingReport) -> list[Table]:
+def tables(
+    reports: Sequence[RecordingReport], total: RecordingReport, listings: bool = True
+) -> list[Table]:
+    """The papers' tables; listings: also where each recording's errors are."""
     rows = [*reports, total] if len(reports) > 1 else list(reports)
     out = [
         Table(
@@ -339,7 +342,7 @@ def tables(reports: Sequence[RecordingReport], total: RecordingReport) -> list[T
             ),
         ),
     ]
-    for r in reports:
+    for r in reports if listings else ():
         out.append(
             Table(
                 f"Where the errors are in {r.name} (frame indices per truth id or radar target)",

@@ -355,3 +355,22 @@ def test_a_recording_without_ground_truth_is_refused(
     assert main(["evaluate", str(tmp_path / "nowhere")]) == 2
     err = capsys.readouterr().err
     assert "fusionscope evaluate:" in err and "nowhere" in err and "Traceback" not in err
+
+
+README = Path(__file__).resolve().parents[2] / "README.md"
+README_BEGIN, README_END = "<!-- evaluate:begin -->\n", "<!-- evaluate:end -->\n"
+BUNDLED = ("highway", "exurban", "stop_and_go")
+
+
+def test_the_readmes_tables_are_the_commands_output_today(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    text = README.read_text(encoding="utf-8")
+    block = text[text.index(README_BEGIN) + len(README_BEGIN) : text.index(README_END)]
+    paths = [str(DEFAULT_RECORDINGS / name) for name in BUNDLED]
+    assert main(["evaluate", *paths, "--format", "markdown"]) == 0
+    assert block.strip() == capsys.readouterr().out.strip(), (
+        "README.md's 'How good is it' tables are stale: paste the output of "
+        "`fusionscope evaluate recordings/highway recordings/exurban recordings/stop_and_go "
+        "--format markdown` between its evaluate markers"
+    )
