@@ -523,6 +523,19 @@ def _guard_rail_savings(
     )
 
 
+def guard_rail_savings(
+    drive: Drive, params: Params, frames: int = 20, warmup: int = 2, repeat: int = 10
+) -> GuardRailSavings:
+    """Paper 002's table I on `frames` frames spread over `drive`, one thread (for
+    `fusionscope evaluate`)."""
+    import cv2
+
+    cv2.setNumThreads(THREADS)
+    return _guard_rail_savings(
+        drive.camera, _frame_pairs(drive, min(frames, len(drive) - 1)), params, warmup, repeat
+    )
+
+
 def _run_throughput(recording: Path | str, params: Params, passes: int) -> RunThroughput:
     """Frames per second of `fusionscope run`'s loop (`core.cli._cmd_run`: `Drive.frame`,
     `FusionEngine.process`, `core.results.frame_record`, one compact JSON line per frame)

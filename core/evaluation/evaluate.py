@@ -14,6 +14,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from core.bench import GuardRailSavings, guard_rail_savings
 from core.engine import FrameResult, FusionEngine
 from core.io.drive import Drive
 from core.io.frame import FrameInput
@@ -63,6 +64,8 @@ class RecordingReport:
     motion_stereo: MaskScore
     pitch: PitchScore
     tracking: TrackingReport
+    # paper 002's table I (None when not timed); a total holds each recording's
+    guardrail_timing: tuple[tuple[str, GuardRailSavings], ...] = field(default=())
     events_by_recording: tuple[tuple[str, EventStats], ...] = field(default=())
 
 
@@ -193,9 +196,10 @@ class _Scorer:
 
 
 def evaluate_recording(
-    path: Path | str, params: Params, progress: Progress | None = None
+    path: Path | str, params: Params, progress: Progress | None = None, timing: bool = True
 ) -> RecordingReport:
-    """Play the recording at `path` through the engine and score it (module docstring).
+    """Play the recording at `path` through the engine and score it (module docstring);
+    timing: also time paper 002's table I (VD, GRD, OBM) on it, one thread.
     RecordingError when it cannot be read; ValueError when it has no ground truth."""
     with Drive(path) as drive:
         if not drive.has_truth:
@@ -213,7 +217,11 @@ def evaluate_recording(
                 scorer.add(frame, result, truth, calibrated)
             if progress is not None:
                 progress(i + 1, len(drive))
-        return scorer.report(drive.path.name)
+        report = scorer.report(drive.path.name)
+        if timing and len(drive) >= 2:
+            timed = guard_rail_savings(drive, params)
+            report = dataclasses.replace(report, guardrail_timing=((report.name, timed),))
+        return report
 
 
 def _sum_tracking(a: TrackingReport, b: TrackingReport) -> TrackingReport:
@@ -258,6 +266,7 @@ def total(reports: Sequence[RecordingReport]) -> RecordingReport:
             motion_stereo=out.motion_stereo + r.motion_stereo,
             pitch=out.pitch + r.pitch,
             tracking=_sum_tracking(out.tracking, r.tracking),
+            guardrail_timing=out.guardrail_timing + r.guardrail_timing,
             events_by_recording=out.events_by_recording + r.events_by_recording,
         )
     return dataclasses.replace(out, name="total")

@@ -20,11 +20,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from core.bench import PAPER_002_MS
+
 from .evaluate import PEDESTRIAN_STAGES, RecordingReport
 from .mot import MotScore
 from .objects import BoxScore, RailScore
 from .vehicles import EventStats, FrameStats
 
+TIMING_TITLE = "Guard rails: execution time per frame, ms, one thread (paper 002, table I)"
 PEDESTRIAN_TITLES = {
     "symmetry": "symmetry alone",
     "motion_stereo": "+ motion stereo",
@@ -128,6 +131,29 @@ def _mot_json(m: MotScore, listings: bool) -> dict[str, Any]:
     return out
 
 
+def _timing_json(r: RecordingReport) -> dict[str, Any] | None:
+    """VD, GRD, OBM and the reduction; a total's per recording with their mean."""
+    if not r.guardrail_timing:
+        return None
+    rows = {
+        name: {
+            "vd_ms": round(g.vd_ms, 4),
+            "grd_ms": round(g.grd_ms, 4),
+            "obm_ms": round(g.obm_ms, 4),
+            "reduction": round(g.reduction, 4),
+        }
+        for name, g in r.guardrail_timing
+    }
+    if len(rows) == 1:
+        return next(iter(rows.values()))
+    return {"recordings": rows, "mean_reduction": round(mean_reduction(r), 4)}
+
+
+def mean_reduction(r: RecordingReport) -> float:
+    """Paper 002's "mean of reductions" over the recordings of a report."""
+    return sum(g.reduction for _, g in r.guardrail_timing) / len(r.guardrail_timing)
+
+
 def figures_json(r: RecordingReport, listings: bool = True) -> dict[str, Any]:
     """Every figure of one report (module docstring)."""
     ms, pitch, t = r.motion_stereo, r.pitch, r.tracking
@@ -137,7 +163,7 @@ def figures_json(r: RecordingReport, listings: bool = True) -> dict[str, Any]:
             "frames": _frames_json(r.vehicles, listings),
             "events": _events_json(r.events),
         },
-        "guardrails": _rails_json(r.guardrails, listings),
+        "guardrails": {**_rails_json(r.guardrails, listings), "timing": _timing_json(r)},
         "pedestrians": {k: _boxes_json(b, listings) for k, b in r.pedestrians.items()},
         "motion_stereo": {
             "obstacles": ms.obstacles,
@@ -280,6 +306,7 @@ def tables(
                 for r in rows
             ),
         ),
+        *_timing_tables(total),
         Table(
             "Pedestrians (paper 000), recall / precision",
             ("recording", "visible", *(PEDESTRIAN_TITLES[k] for k in PEDESTRIAN_STAGES), "tracked"),
@@ -365,6 +392,33 @@ def tables(
             )
         )
     return out
+
+
+def _timing_tables(total: RecordingReport) -> list[Table]:
+    if not total.guardrail_timing:
+        return []
+    paper = PAPER_002_MS
+    rows = [
+        (name, f"{g.vd_ms:.3f}", f"{g.grd_ms:.3f}", f"{g.obm_ms:.3f}", f"{g.reduction:.0%}")
+        for name, g in total.guardrail_timing
+    ]
+    rows.append(
+        (
+            "paper 002",
+            f"{paper['vd']:.1f}",
+            f"{paper['grd']:.1f}",
+            f"{paper['obm']:.1f}",
+            f"{1 - paper['obm'] / paper['vd']:.0%}",
+        )
+    )
+    return [
+        Table(
+            TIMING_TITLE,
+            ("recording", "VD", "GRD", "OBM", "reduction"),
+            tuple(rows),
+            (f"mean of reductions: {mean_reduction(total):.0%} (paper 002: 20 %)",),
+        )
+    ]
 
 
 def _counts(s: FrameStats) -> str:
