@@ -24,6 +24,7 @@ from core.pedestrian import Verdict
 from core.tracking import Track
 
 from . import objects, vehicles
+from .counts import add_fields
 from .mot import MotAccumulator, MotScore
 from .objects import BoxScore, MaskScore, PitchScore, RailScore
 from .vehicles import Estimate, EventStats, FrameStats, FrameVehicles
@@ -224,31 +225,6 @@ def evaluate_recording(
         return report
 
 
-def _sum_tracking(a: TrackingReport, b: TrackingReport) -> TrackingReport:
-    return TrackingReport(
-        vehicles=a.vehicles + b.vehicles,
-        events=a.events + b.events,
-        pedestrians=a.pedestrians + b.pedestrians,
-        guardrails=a.guardrails + b.guardrails,
-        vehicle_mot=_sum_mot(a.vehicle_mot, b.vehicle_mot),
-        pedestrian_mot=_sum_mot(a.pedestrian_mot, b.pedestrian_mot),
-    )
-
-
-def _sum_mot(a: MotScore, b: MotScore) -> MotScore:
-    return MotScore(
-        a.truth + b.truth,
-        a.hypotheses + b.hypotheses,
-        a.matches + b.matches,
-        a.misses + b.misses,
-        a.false_positives + b.false_positives,
-        a.id_switches + b.id_switches,
-        a.iou_sum + b.iou_sum,
-        a.idtp + b.idtp,
-        (),  # frame indices belong to their recordings
-    )
-
-
 def total(reports: Sequence[RecordingReport]) -> RecordingReport:
     """The recordings' figures added up; frame listings stay with their recordings."""
     if not reports:
@@ -265,7 +241,7 @@ def total(reports: Sequence[RecordingReport]) -> RecordingReport:
             pedestrians={k: out.pedestrians[k] + r.pedestrians[k] for k in out.pedestrians},
             motion_stereo=out.motion_stereo + r.motion_stereo,
             pitch=out.pitch + r.pitch,
-            tracking=_sum_tracking(out.tracking, r.tracking),
+            tracking=add_fields(out.tracking, r.tracking),
             guardrail_timing=out.guardrail_timing + r.guardrail_timing,
             events_by_recording=out.events_by_recording + r.events_by_recording,
         )

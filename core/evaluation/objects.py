@@ -36,6 +36,7 @@ from core.io.groundtruth import FrameTruth, TruthObject
 from core.params import MotionStereoParams
 from core.search_area import intersection_area, rect_area
 
+from .counts import add_fields
 from .vehicles import VEHICLE_CLASSES, lies_on
 
 Box = tuple[float, float, float, float]
@@ -76,14 +77,7 @@ class BoxScore:
         return self.true_boxes / self.boxes if self.boxes else 0.0
 
     def __add__(self, other: BoxScore) -> BoxScore:
-        return BoxScore(
-            self.visible + other.visible,
-            self.found + other.found,
-            self.boxes + other.boxes,
-            self.true_boxes + other.true_boxes,
-            self.missed_at + other.missed_at,
-            self.false_at + other.false_at,
-        )
+        return add_fields(self, other)
 
 
 def visible_person(o: TruthObject, min_distance_m: float, max_distance_m: float) -> bool:
@@ -147,14 +141,7 @@ class RailScore:
         return len(self.vehicles_labelled_at)
 
     def __add__(self, other: RailScore) -> RailScore:
-        return RailScore(
-            self.slow_targets + other.slow_targets,
-            self.rail_returns + other.rail_returns,
-            self.labelled + other.labelled,
-            self.fn_at + other.fn_at,
-            self.fp_at + other.fp_at,
-            self.vehicles_labelled_at + other.vehicles_labelled_at,
-        )
+        return add_fields(self, other)
 
 
 def rails_on_road_m(truth: FrameTruth, camera: CameraModel) -> list[npt.NDArray[np.float64]]:
@@ -231,15 +218,7 @@ class MaskScore:
         return self.marked_on_objects_px / self.marked_px if self.marked_px else 0.0
 
     def __add__(self, other: MaskScore) -> MaskScore:
-        return MaskScore(
-            self.obstacles + other.obstacles,
-            self.obstacles_hit + other.obstacles_hit,
-            self.truth_px + other.truth_px,
-            self.truth_marked_px + other.truth_marked_px,
-            self.marked_px + other.marked_px,
-            self.marked_on_objects_px + other.marked_on_objects_px,
-            self.missed_at + other.missed_at,
-        )
+        return add_fields(self, other)
 
 
 def _on_grid(o: TruthObject, params: MotionStereoParams) -> bool:
@@ -329,10 +308,7 @@ class PitchScore:
         return self._rms(self.calibration_errors_deg)
 
     def __add__(self, other: PitchScore) -> PitchScore:
-        return PitchScore(
-            self.errors_deg + other.errors_deg,
-            self.calibration_errors_deg + other.calibration_errors_deg,
-        )
+        return add_fields(self, other)
 
 
 def score_pitch(pitch_rad: float, true_pitch_rad: float, calibrated_rad: float) -> PitchScore:

@@ -48,6 +48,8 @@ from typing import Literal, Protocol
 from core.io.frame import RadarTarget
 from core.io.groundtruth import TruthObject
 
+from .counts import add_fields
+
 VEHICLE_CLASSES = ("car", "van", "truck")
 MAX_OCCLUSION = 0.5  # a vehicle hidden this much or more is not framed
 MAX_DISTANCE_M = 60.0  # beyond this no vehicle is framed
@@ -113,17 +115,7 @@ class FrameStats:
         return self.rd + self.fn + self.rfn
 
     def __add__(self, other: FrameStats) -> FrameStats:
-        return FrameStats(
-            self.rd + other.rd,
-            self.fn + other.fn,
-            self.rfn + other.rfn,
-            self.fp + other.fp,
-            self.nvo + other.nvo,
-            self.fn_at + other.fn_at,
-            self.rfn_at + other.rfn_at,
-            self.fp_at + other.fp_at,
-            self.nvo_at + other.nvo_at,
-        )
+        return add_fields(self, other)
 
 
 @dataclass(frozen=True)
@@ -145,12 +137,7 @@ class EventStats:
         return self.refined / supplied if supplied else 0.0
 
     def __add__(self, other: EventStats) -> EventStats:
-        return EventStats(
-            self.events + other.events,
-            self.radar_miss + other.radar_miss,
-            self.not_refined + other.not_refined,
-            self.refined + other.refined,
-        )
+        return add_fields(self, other)
 
 
 def framed(o: TruthObject) -> bool:
