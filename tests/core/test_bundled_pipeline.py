@@ -2,90 +2,54 @@
 before and after each fusion filter and after tracking, and the vehicle tracks' id switches,
 reported in the test output.
 
-A visible pedestrian (less than half occluded, 3-40 m ahead) is found when a box overlaps
-its true box by IOU_MATCH of their union; a box is a true positive when it overlaps any
-pedestrian so (occluded ones included). The floors sit under what the engine reaches today,
-so a regression fails.
+Pedestrians are scored by `core.evaluation.objects.score_pedestrians` (its docstring has
+the rules; `fusionscope evaluate` prints the same figures). The floors sit under what the
+engine reaches today, so a regression fails.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import pytest
 
 from core.engine import FrameResult
+from core.evaluation.evaluate import PEDESTRIAN_STAGES
+from core.evaluation.objects import BoxScore, score_pedestrians
 from core.io.groundtruth import FrameTruth, TruthObject
 from core.params import Params
-from core.pedestrian import Verdict
-from core.search_area import intersection_area, rect_area
 from tests.core.playback import playback
 
-IOU_MATCH = 0.3
 MAX_OCCLUSION = 0.5
 VEHICLES = ("car", "van", "truck")
 # a confirmed vehicle track this close to a radar-seen vehicle's rear (metres) follows it
 TRACK_DISTANCE_M, TRACK_LATERAL_M = 3.0, 1.5
 
-Box = tuple[float, float, float, float]
-# the pedestrian outputs compared: the detector alone (its candidates that passed the size
-# and perspective constraints), after the motion-stereo filter, after the vehicle filter
-STAGES: dict[str, tuple[Verdict, ...]] = {
-    "symmetry": ("pedestrian", "motion_stereo", "vehicle"),
-    "+motion stereo": ("pedestrian", "vehicle"),
-    "+vehicles": ("pedestrian",),
+# the pedestrian outputs compared (core.evaluation.evaluate.PEDESTRIAN_STAGES), then tracked
+STAGES = {
+    "symmetry": PEDESTRIAN_STAGES["symmetry"],
+    "+motion stereo": PEDESTRIAN_STAGES["motion_stereo"],
+    "+vehicles": PEDESTRIAN_STAGES["vehicles"],
 }
 
 
-def _iou(a: Box, b: Box) -> float:
-    shared = intersection_area(a, b)
-    union = rect_area(a) + rect_area(b) - shared
-    return shared / union if union > 0 else 0.0
-
-
-@dataclass
-class Score:
-    found: int = 0
-    visible: int = 0
-    true_boxes: int = 0
-    boxes: int = 0
-
-    def add(self, boxes: Sequence[Box], truth: FrameTruth, params: Params) -> None:
-        people = [o for o in truth.objects if o.cls == "pedestrian"]
-        p = params.pedestrian
-        visible = [
-            o
-            for o in people
-            if o.occlusion < MAX_OCCLUSION
-            and p.min_distance_m <= o.position_m[0] <= p.max_distance_m
-        ]
-        self.visible += len(visible)
-        self.found += sum(any(_iou(b, o.box_px) >= IOU_MATCH for b in boxes) for o in visible)
-        self.boxes += len(boxes)
-        self.true_boxes += sum(any(_iou(b, o.box_px) >= IOU_MATCH for o in people) for b in boxes)
-
-    @property
-    def recall(self) -> float:
-        return self.found / max(self.visible, 1)
-
-    @property
-    def precision(self) -> float:
-        return self.true_boxes / max(self.boxes, 1)
-
-
-def _pedestrian_scores(name: str) -> dict[str, Score]:
-    params = Params()
-    scores = {stage: Score() for stage in (*STAGES, "tracked")}
+def _pedestrian_scores(name: str) -> dict[str, BoxScore]:
+    p = Params().pedestrian
+    scores = {stage: BoxScore() for stage in (*STAGES, "tracked")}
     for result, truth in playback(name):
         assert truth is not None
-        for stage, verdicts in STAGES.items():
-            boxes = [
+        outputs = {
+            stage: [
                 c.extended_box_px for c in result.pedestrian.candidates if c.verdict in verdicts
             ]
-            scores[stage].add(boxes, truth, params)
-        scores["tracked"].add([t.box_px for t in result.tracked_pedestrians], truth, params)
+            for stage, verdicts in STAGES.items()
+        }
+        outputs["tracked"] = [t.box_px for t in result.tracked_pedestrians]
+        for stage, boxes in outputs.items():
+            scores[stage] += score_pedestrians(
+                result.index, boxes, truth.objects, p.min_distance_m, p.max_distance_m
+            )
     return scores
 
 
