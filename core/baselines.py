@@ -58,7 +58,7 @@ import numpy.typing as npt
 
 from core.camera import CameraModel
 from core.checks import require_grey_image
-from core.pitch import calibrated_vanishing_point_px
+from core.pitch import Lines, calibrated_vanishing_point_px, intersections
 
 Box = tuple[float, float, float, float]
 U8Array = npt.NDArray[np.uint8]
@@ -75,8 +75,6 @@ HOG_PERSON_LEFT = 0.10
 HOG_PERSON_TOP = 0.07
 HOG_PERSON_WIDTH = 0.80
 HOG_PERSON_HEIGHT = 0.80
-# Lines whose unit normals' cross product is below this are parallel: no intersection.
-MIN_INTERSECTION_SINE = 1e-9
 
 
 class BaselineUnavailableError(RuntimeError):
@@ -350,23 +348,6 @@ class HoughPitchResult:
     calibrated_vp_px: FloatArray
 
 
-def _intersections(segments: FloatArray) -> FloatArray:
-    """(P, 2) intersections of every pair of the lines through (N, 4) segments, parallel
-    pairs left out."""
-    a = segments[:, 3] - segments[:, 1]
-    b = segments[:, 0] - segments[:, 2]
-    norm = np.hypot(a, b)
-    a, b = a / norm, b / norm
-    c = -(a * segments[:, 0] + b * segments[:, 1])
-    i, j = np.triu_indices(len(segments), k=1)
-    det = a[i] * b[j] - a[j] * b[i]
-    ok = np.abs(det) > MIN_INTERSECTION_SINE
-    i, j, det = i[ok], j[ok], det[ok]
-    u = (b[i] * c[j] - b[j] * c[i]) / det
-    v = (a[j] * c[i] - a[i] * c[j]) / det
-    return np.stack([u, v], axis=1)
-
-
 def hough_pitch(
     image: U8Array, camera: CameraModel, params: HoughPitchParams | None = None
 ) -> HoughPitchResult:
@@ -423,7 +404,7 @@ def hough_pitch(
     kept = segments[slanted][order]
 
     # 4-5. intersections near the calibrated vanishing point, their median
-    points = _intersections(kept) if len(kept) >= 2 else np.zeros((0, 2))
+    points, _, _ = intersections(Lines.through_segments(kept), False, 0.0)
     used = np.all(np.abs(points - vp_cal) <= p.vp_region_px, axis=1)
     vp: tuple[float, float] | None = None
     pitch: float | None = None

@@ -125,6 +125,17 @@ class Lines:
     def empty(cls) -> Lines:
         return cls(np.zeros((0, 3)), np.zeros(0), np.zeros((0, 2)))
 
+    @classmethod
+    def through_segments(cls, segments_px: FloatArray) -> Lines:
+        """The lines through (N, 4) segments (u0, v0, u1, v1), confidence their length."""
+        u0, v0, u1, v1 = segments_px.T
+        length = np.hypot(u1 - u0, v1 - v0)
+        a, b = (v1 - v0) / length, (u0 - u1) / length
+        sign = np.where(a < 0, -1.0, 1.0)  # a >= 0
+        a, b = a * sign, b * sign
+        abc = np.stack([a, b, -(a * u0 + b * v0)], axis=1)
+        return cls(abc, length, np.stack([np.minimum(v0, v1), np.maximum(v0, v1)], axis=1))
+
 
 @dataclass(frozen=True, eq=False)
 class Clusters:
