@@ -353,34 +353,21 @@ def _total_runs(camera: CameraModel, pairs: Sequence[Pair], params: Params) -> l
 
 
 def _reference_runs(camera: CameraModel, pairs: Sequence[Pair], params: Params) -> list[Run]:
-    """The reference kernel on each frame: `cv2.warpPerspective` of the processed window to
-    motion stereo's grid, with the homography and flags `MotionStereo.update` uses (the
-    calibrated pitch)."""
-    import cv2
+    """The reference kernel on each frame: motion stereo's `warp_to_grid` (one
+    `cv2.warpPerspective`) of the processed window, with the calibrated pitch."""
     import numpy as np
 
-    from core.motion_stereo import grid_for
+    from core.motion_stereo import grid_for, warp_to_grid, window_homography
 
     grid = grid_for(params.motion_stereo)
-    rows, cols = grid.shape
     first, stop = camera.row_window_px
-    H_image_grid = camera.H_image_grid(grid)
-    H_window_grid = H_image_grid.copy()
-    H_window_grid[1] -= first * H_image_grid[2]  # the window's row 0 is image row `first`
+    H_window_grid = window_homography(camera.H_image_grid(grid), first)
     runs: list[Run] = []
     for _, now in pairs:
 
         def run(window=now.image[first:stop]) -> Callable[[], object]:
-            out = np.empty((rows, cols), dtype=np.uint8)
-            return lambda: cv2.warpPerspective(
-                window,
-                H_window_grid,
-                (cols, rows),
-                dst=out,
-                flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                borderMode=cv2.BORDER_CONSTANT,
-                borderValue=0,
-            )
+            out = np.empty(grid.shape, dtype=np.uint8)
+            return lambda: warp_to_grid(window, H_window_grid, out)
 
         runs.append(run)
     return runs

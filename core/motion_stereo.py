@@ -119,6 +119,29 @@ def grid_for(params: MotionStereoParams) -> BirdEyeGrid:
     )
 
 
+def window_homography(H_image_grid: FloatArray, first_row_px: int) -> FloatArray:
+    """(3, 3) map from grid cells to the pixels of a window whose row 0 is image row
+    first_row_px, from H_image_grid (grid cells to full-image pixels)."""
+    H_window_grid = H_image_grid.copy()
+    H_window_grid[1] -= first_row_px * H_image_grid[2]
+    return H_window_grid
+
+
+def warp_to_grid(window: U8Array, H_window_grid: FloatArray, bird_eye: U8Array) -> None:
+    """Step 1's inverse perspective mapping: `bird_eye` (rows, cols) filled from `window`
+    by bilinear sampling, 0 where a cell's road point falls outside it."""
+    rows, cols = bird_eye.shape
+    cv2.warpPerspective(
+        window,
+        H_window_grid,
+        (cols, rows),
+        dst=bird_eye,
+        flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+        borderMode=cv2.BORDER_CONSTANT,
+        borderValue=0,
+    )
+
+
 def frames_to_forget(params: MotionStereoParams) -> int | None:
     """Frames after which the background no longer depends on what came before them.
 
@@ -410,18 +433,9 @@ class MotionStereo:
 
         # 1. A: the bird's-eye view of this frame (inverse perspective mapping).
         H_image_grid = camera.H_image_grid(grid)
-        H_window_grid = H_image_grid.copy()
-        H_window_grid[1] -= first * H_image_grid[2]
+        H_window_grid = window_homography(H_image_grid, first)
         bird_eye = np.empty((rows, cols), dtype=np.uint8)
-        cv2.warpPerspective(
-            window,
-            H_window_grid,
-            (cols, rows),
-            dst=bird_eye,
-            flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-            borderMode=cv2.BORDER_CONSTANT,
-            borderValue=0,
-        )
+        warp_to_grid(window, H_window_grid, bird_eye)
         poly_a = _visible_polygon(H_window_grid, width, stop - first, (rows, cols))
 
         # 2. B: the background moved by the ego motion; B = A without one.
