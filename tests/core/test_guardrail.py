@@ -13,8 +13,9 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 
-from core.camera import CameraModel
 from core.cli import DEFAULT_RECORDINGS
+from core.evaluation.objects import NEAR_RAIL_M, distance_to_polyline_m, rails_on_road_m
+from core.evaluation.vehicles import VEHICLE_CLASSES, lies_on
 from core.guardrail import (
     GuardRailCheck,
     detect_guard_rails,
@@ -29,7 +30,6 @@ from core.io.frame import RadarTarget
 from core.io.groundtruth import FrameTruth
 from core.params import GuardRailParams, Params, ParamsError
 from core.search_area import SearchArea, search_areas
-from core.synth.render import RAIL_Z_M
 
 PARAMS = GuardRailParams()
 H, W = 32, 64  # the usual resampled search area
@@ -465,10 +465,6 @@ def test_bad_patches_and_arguments_are_rejected_by_name() -> None:
 
 # --- the bundled highway drive ----------------------------------------------------------------
 
-VEHICLES = ("car", "van", "truck")
-RAIL_HEIGHT_M = 0.5 * (RAIL_Z_M[0] + RAIL_Z_M[1])  # the truth polylines run along the beam
-NEAR_RAIL_M = 1.0  # a target this close to a truth rail is a rail return
-VEHICLE_MARGIN_M = 0.5  # a target this close to a vehicle's footprint lies on the vehicle
 MAX_OCCLUSION = 0.1  # share of an area nearer vehicles may hide for it to count as clear
 FRAME_STEP = 5
 
@@ -489,38 +485,8 @@ class HighwayFigures:
     any_speed_on_vehicle_labelled: int
 
 
-def rails_m(truth: FrameTruth, camera: CameraModel) -> list[npt.NDArray[np.float64]]:
-    """(N, 2) vehicle-frame (x, y) polylines of the truth rails: their image polylines run
-    along the beam at RAIL_HEIGHT_M, taken back to that height with the true pitch."""
-    out = []
-    for rail in truth.guard_rails:
-        xyz = camera.point_at_height(np.array(rail.polyline_px), RAIL_HEIGHT_M)
-        xy = xyz[~np.isnan(xyz[:, 0]), :2]
-        if len(xy) >= 2:
-            out.append(xy)
-    return out
-
-
-def distance_to_polyline(p: npt.NDArray[np.float64], poly: npt.NDArray[np.float64]) -> float:
-    a, b = poly[:-1], poly[1:]
-    ab = b - a
-    t = np.clip(((p - a) * ab).sum(axis=1) / np.maximum((ab * ab).sum(axis=1), 1e-12), 0, 1)
-    return float(np.min(np.hypot(*(a + t[:, None] * ab - p).T)))
-
-
 def on_vehicle(t: RadarTarget, truth: FrameTruth) -> bool:
-    """position_m is the centre of the face towards the ego car; the body extends size_m[0]
-    beyond it and size_m[1] across."""
-    for o in truth.objects:
-        if o.cls in VEHICLES:
-            x, y, _ = o.position_m
-            length, width, _ = o.size_m
-            if (
-                x - VEHICLE_MARGIN_M <= t.x_m <= x + length + VEHICLE_MARGIN_M
-                and abs(t.y_m - y) <= width / 2 + VEHICLE_MARGIN_M
-            ):
-                return True
-    return False
+    return any(o.cls in VEHICLE_CLASSES and lies_on(t.x_m, t.y_m, o) for o in truth.objects)
 
 
 def occlusion(area: SearchArea, truth: FrameTruth) -> float:
@@ -528,7 +494,7 @@ def occlusion(area: SearchArea, truth: FrameTruth) -> float:
     c0, r0, c1, r1 = area.box_px
     covered = 0.0
     for o in truth.objects:
-        if o.cls in VEHICLES and o.position_m[0] < area.x_m:
+        if o.cls in VEHICLE_CLASSES and o.position_m[0] < area.x_m:
             u0, v0, u1, v1 = o.box_px
             covered += max(0.0, min(c1, u1) - max(c0, u0)) * max(0.0, min(r1, v1) - max(r0, v0))
     return covered / ((c1 - c0) * (r1 - r0))
@@ -542,7 +508,7 @@ def highway_figures() -> HighwayFigures:
         for k in range(0, len(drive), FRAME_STEP):
             frame, truth = drive.frame(k), drive.truth(k)
             assert truth is not None
-            rails = rails_m(truth, drive.camera.with_pitch(truth.pitch_rad))
+            rails = rails_on_road_m(truth, drive.camera.with_pitch(truth.pitch_rad))
             areas = search_areas(frame.image, drive.camera, frame.radar, params.vehicle)
             by_index = {a.target_index: a for a in areas}
             result = detect_guard_rails(areas, frame.speed_mps, params.guardrail)
@@ -551,7 +517,7 @@ def highway_figures() -> HighwayFigures:
                 t = frame.radar[check.target_index]
                 labelled = check.target_index in result.guard_rail_targets
                 near = min(
-                    (distance_to_polyline(np.array([t.x_m, t.y_m]), r) for r in rails),
+                    (distance_to_polyline_m(t.x_m, t.y_m, r) for r in rails),
                     default=math.inf,
                 )
                 n["slow"] += 1
