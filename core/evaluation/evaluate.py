@@ -13,6 +13,7 @@ import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TypeVar
 
 from core.bench import GuardRailSavings, guard_rail_savings
 from core.engine import FrameResult, FusionEngine
@@ -24,7 +25,7 @@ from core.pedestrian import Verdict
 from core.tracking import Track
 
 from . import objects, vehicles
-from .counts import add_fields
+from .counts import sum_fields
 from .mot import MotAccumulator, MotScore
 from .objects import BoxScore, MaskScore, PitchScore, RailScore
 from .vehicles import Estimate, EventStats, FrameStats, FrameVehicles
@@ -38,6 +39,7 @@ PEDESTRIAN_STAGES: dict[str, tuple[Verdict, ...]] = {
 }
 
 Progress = Callable[[int, int], None]
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -67,7 +69,6 @@ class RecordingReport:
     tracking: TrackingReport
     # paper 002's table I (None when not timed); a total holds each recording's
     guardrail_timing: tuple[tuple[str, GuardRailSavings], ...] = field(default=())
-    events_by_recording: tuple[tuple[str, EventStats], ...] = field(default=())
 
 
 def _vehicle_estimates(result: FrameResult) -> list[Estimate]:
@@ -115,12 +116,12 @@ class _Scorer:
         self.frames = 0
         self.vehicle_frames: list[FrameVehicles] = []
         self.tracked_frames: list[FrameVehicles] = []
-        self.rails = RailScore()
-        self.tracked_rails = RailScore()
-        self.pedestrians = {stage: BoxScore() for stage in PEDESTRIAN_STAGES}
-        self.tracked_pedestrians = BoxScore()
-        self.mask = MaskScore()
-        self.pitch = PitchScore()
+        self.rails: list[RailScore] = []
+        self.tracked_rails: list[RailScore] = []
+        self.pedestrians: dict[str, list[BoxScore]] = {stage: [] for stage in PEDESTRIAN_STAGES}
+        self.tracked_pedestrians: list[BoxScore] = []
+        self.mask: list[MaskScore] = [MaskScore()]  # none on a first frame
+        self.pitch: list[PitchScore] = []
         self.vehicle_mot = MotAccumulator()
         self.pedestrian_mot = MotAccumulator()
 
@@ -143,31 +144,41 @@ class _Scorer:
         )
         rails_m = objects.rails_on_road_m(truth, result.camera.with_pitch(truth.pitch_rad))
         checked = [c.target_index for c in result.guardrail.checks]
-        self.rails += objects.score_rails(
-            i, checked, result.guardrail.guard_rail_targets, frame.radar, truth, rails_m
+        self.rails.append(
+            objects.score_rails(
+                i, checked, result.guardrail.guard_rail_targets, frame.radar, truth, rails_m
+            )
         )
-        self.tracked_rails += objects.score_rails(
-            i, checked, result.tracked_guard_rails, frame.radar, truth, rails_m
+        self.tracked_rails.append(
+            objects.score_rails(i, checked, result.tracked_guard_rails, frame.radar, truth, rails_m)
         )
         lo, hi = p.pedestrian.min_distance_m, p.pedestrian.max_distance_m
         for stage, verdicts in PEDESTRIAN_STAGES.items():
             boxes = [
                 c.extended_box_px for c in result.pedestrian.candidates if c.verdict in verdicts
             ]
-            self.pedestrians[stage] += objects.score_pedestrians(i, boxes, truth.objects, lo, hi)
+            self.pedestrians[stage].append(
+                objects.score_pedestrians(i, boxes, truth.objects, lo, hi)
+            )
         tracked = [t.box_px for t in result.tracked_pedestrians]
-        self.tracked_pedestrians += objects.score_pedestrians(i, tracked, truth.objects, lo, hi)
+        self.tracked_pedestrians.append(
+            objects.score_pedestrians(i, tracked, truth.objects, lo, hi)
+        )
         ms = result.motion_stereo
         if ms.mode in ("motion_stereo", "background_subtraction"):
-            self.mask += objects.score_mask(
-                i,
-                ms.image_mask,
-                ms.image_mask_first_row_px,
-                truth,
-                p.motion_stereo,
-                ms.mode == "background_subtraction",
+            self.mask.append(
+                objects.score_mask(
+                    i,
+                    ms.image_mask,
+                    ms.image_mask_first_row_px,
+                    truth,
+                    p.motion_stereo,
+                    ms.mode == "background_subtraction",
+                )
             )
-        self.pitch += objects.score_pitch(result.pitch.pitch_rad, truth.pitch_rad, calibrated_rad)
+        self.pitch.append(
+            objects.score_pitch(result.pitch.pitch_rad, truth.pitch_rad, calibrated_rad)
+        )
         self.vehicle_mot.update(i, _truth_vehicles(truth), _track_boxes(result.tracked_vehicles))
         self.pedestrian_mot.update(
             i, _truth_people(truth, p), _track_boxes(result.tracked_pedestrians)
@@ -180,19 +191,18 @@ class _Scorer:
             frames=self.frames,
             vehicles=vehicles.frame_stats(self.vehicle_frames),
             events=events,
-            guardrails=self.rails,
-            pedestrians=dict(self.pedestrians),
-            motion_stereo=self.mask,
-            pitch=self.pitch,
+            guardrails=sum_fields(self.rails),
+            pedestrians={k: sum_fields(v) for k, v in self.pedestrians.items()},
+            motion_stereo=sum_fields(self.mask),
+            pitch=sum_fields(self.pitch),
             tracking=TrackingReport(
                 vehicles=vehicles.frame_stats(self.tracked_frames),
                 events=vehicles.event_stats(self.tracked_frames),
-                pedestrians=self.tracked_pedestrians,
-                guardrails=self.tracked_rails,
+                pedestrians=sum_fields(self.tracked_pedestrians),
+                guardrails=sum_fields(self.tracked_rails),
                 vehicle_mot=self.vehicle_mot.score(),
                 pedestrian_mot=self.pedestrian_mot.score(),
             ),
-            events_by_recording=((name, events),),
         )
 
 
@@ -226,23 +236,23 @@ def evaluate_recording(
 
 
 def total(reports: Sequence[RecordingReport]) -> RecordingReport:
-    """The recordings' figures added up; frame listings stay with their recordings."""
+    """The recordings' figures added up (listings concatenate; frame indices in them are
+    their own recording's, so `report.as_json` leaves them out of a total)."""
     if not reports:
         raise ValueError("reports: expected at least one recording's report, got none")
-    first, *rest = reports
-    out = first
-    for r in rest:
-        out = RecordingReport(
-            name="total",
-            frames=out.frames + r.frames,
-            vehicles=out.vehicles + r.vehicles,
-            events=out.events + r.events,
-            guardrails=out.guardrails + r.guardrails,
-            pedestrians={k: out.pedestrians[k] + r.pedestrians[k] for k in out.pedestrians},
-            motion_stereo=out.motion_stereo + r.motion_stereo,
-            pitch=out.pitch + r.pitch,
-            tracking=add_fields(out.tracking, r.tracking),
-            guardrail_timing=out.guardrail_timing + r.guardrail_timing,
-            events_by_recording=out.events_by_recording + r.events_by_recording,
-        )
-    return dataclasses.replace(out, name="total")
+
+    def summed(part: Callable[[RecordingReport], T]) -> T:
+        return sum_fields([part(r) for r in reports])
+
+    return RecordingReport(
+        name="total",
+        frames=sum(r.frames for r in reports),
+        vehicles=summed(lambda r: r.vehicles),
+        events=summed(lambda r: r.events),
+        guardrails=summed(lambda r: r.guardrails),
+        pedestrians={k: sum_fields([r.pedestrians[k] for r in reports]) for k in PEDESTRIAN_STAGES},
+        motion_stereo=summed(lambda r: r.motion_stereo),
+        pitch=summed(lambda r: r.pitch),
+        tracking=summed(lambda r: r.tracking),
+        guardrail_timing=tuple(t for r in reports for t in r.guardrail_timing),
+    )
