@@ -28,6 +28,7 @@ Figures, not verdicts: the budget is printed beside the median, and nothing fail
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
 import functools
@@ -36,7 +37,7 @@ import json
 import os
 import platform
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -88,6 +89,19 @@ PAPER_002_MS = {"vd": 26.6, "grd": 23.2, "obm": 21.4}
 RUN_PASSES = 3  # passes over the drive for the `fusionscope run` throughput (median taken)
 PERCENTILES = (10.0, 50.0, 90.0)
 THREADS = 1
+
+
+@contextlib.contextmanager
+def one_thread() -> Iterator[None]:
+    """OpenCV on THREADS thread(s) inside the block, its previous thread count after it."""
+    import cv2
+
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(THREADS)
+    try:
+        yield
+    finally:
+        cv2.setNumThreads(before)
 
 
 @dataclass(frozen=True)
@@ -515,12 +529,10 @@ def guard_rail_savings(
 ) -> GuardRailSavings:
     """Paper 002's table I on `frames` frames spread over `drive`, one thread (for
     `fusionscope evaluate`)."""
-    import cv2
-
-    cv2.setNumThreads(THREADS)
-    return _guard_rail_savings(
-        drive.camera, _frame_pairs(drive, min(frames, len(drive) - 1)), params, warmup, repeat
-    )
+    with one_thread():
+        return _guard_rail_savings(
+            drive.camera, _frame_pairs(drive, min(frames, len(drive) - 1)), params, warmup, repeat
+        )
 
 
 def _run_throughput(recording: Path | str, params: Params, passes: int) -> RunThroughput:
@@ -608,8 +620,6 @@ def bench(
     vehicle and guardrail, paper 002's table I. ValueError naming the argument on a stage
     not in STAGES, frames below 2, warmup below 0, repeat or run_passes below 1, or a
     stage with nothing to time on the chosen frames."""
-    import cv2
-
     from core.io.drive import Drive
     from core.params import Params
 
@@ -626,37 +636,39 @@ def bench(
             raise ValueError(f"{name}: expected a whole number >= {least}, got {value}")
     chosen = list(dict.fromkeys(stages))
     params = params or Params()
-    cv2.setNumThreads(THREADS)
-    make = {
-        "pitch": _pitch_runs,
-        "motion_stereo": _motion_stereo_runs,
-        "vehicle": _vehicle_runs,
-        "guardrail": _guardrail_runs,
-        "pedestrian": _pedestrian_runs,
-        "total": _total_runs,
-    }
-    with Drive(recording) as drive:
-        pairs = _frame_pairs(drive, frames)
-        camera = drive.camera
-        cases = _tracking_cases(drive, pairs, params) if "tracking" in chosen else []
-    reference = _reference_kernel(camera, pairs, params, warmup, repeat)
-    timings: dict[str, StageTiming] = {}
-    try:
-        for stage in chosen:
-            runs = (
-                _tracking_runs(cases) if stage == "tracking" else make[stage](camera, pairs, params)
-            )
-            timings[stage] = _stage_timing(
-                stage, runs, len(pairs), _image(camera), reference.median_ms, warmup, repeat
-            )
-    except ValueError as err:
-        raise ValueError(f"{recording}: {err}") from None
-    savings = None
-    if "vehicle" in chosen and "guardrail" in chosen:
-        savings = _guard_rail_savings(camera, pairs, params, warmup, repeat)
-    total = timings.pop(TOTAL, None)
-    run = _run_throughput(recording, params, run_passes) if total is not None else None
-    return BenchReport(timings, total, reference, run, savings, machine())
+    with one_thread():
+        make = {
+            "pitch": _pitch_runs,
+            "motion_stereo": _motion_stereo_runs,
+            "vehicle": _vehicle_runs,
+            "guardrail": _guardrail_runs,
+            "pedestrian": _pedestrian_runs,
+            "total": _total_runs,
+        }
+        with Drive(recording) as drive:
+            pairs = _frame_pairs(drive, frames)
+            camera = drive.camera
+            cases = _tracking_cases(drive, pairs, params) if "tracking" in chosen else []
+        reference = _reference_kernel(camera, pairs, params, warmup, repeat)
+        timings: dict[str, StageTiming] = {}
+        try:
+            for stage in chosen:
+                runs = (
+                    _tracking_runs(cases)
+                    if stage == "tracking"
+                    else make[stage](camera, pairs, params)
+                )
+                timings[stage] = _stage_timing(
+                    stage, runs, len(pairs), _image(camera), reference.median_ms, warmup, repeat
+                )
+        except ValueError as err:
+            raise ValueError(f"{recording}: {err}") from None
+        savings = None
+        if "vehicle" in chosen and "guardrail" in chosen:
+            savings = _guard_rail_savings(camera, pairs, params, warmup, repeat)
+        total = timings.pop(TOTAL, None)
+        run = _run_throughput(recording, params, run_passes) if total is not None else None
+        return BenchReport(timings, total, reference, run, savings, machine())
 
 
 def format_table(report: BenchReport) -> str:

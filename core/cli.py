@@ -358,7 +358,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         params = load_params(args.params) if args.params else Params()
         reports = []
         for path in args.recordings:
-            reports.append(evaluate_recording(path, params, ProgressBar(f"evaluate {path.name}")))
+            bar = ProgressBar(f"evaluate {path.name}")
+            reports.append(evaluate_recording(path, params, bar, baselines=args.baselines))
     except (RecordingError, ParamsError, ValueError, OSError) as err:
         print(f"fusionscope evaluate: {err}", file=sys.stderr)
         return 2
@@ -750,6 +751,14 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("recordings", type=Path, nargs="+", help="recording folders")
     evaluate.add_argument("--params", type=Path, help="parameter file (default: the papers')")
     evaluate.add_argument("--format", choices=("table", "markdown", "csv", "json"), default="table")
+    evaluate.add_argument(
+        "--baselines",
+        action="store_true",
+        help=(
+            "also run OpenCV's HOG people detector, a Hough-line vanishing point and MOG2 "
+            "background subtraction on the same frames and show them beside the stages"
+        ),
+    )
     evaluate.set_defaults(func=_cmd_evaluate)
 
     from core.bench import STAGES

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TypeVar
 
-from core.bench import GuardRailSavings, guard_rail_savings
+from core.bench import GuardRailSavings, guard_rail_savings, one_thread
 from core.engine import FrameResult, FusionEngine
 from core.io.drive import Drive
 from core.io.frame import FrameInput
@@ -25,6 +25,7 @@ from core.pedestrian import Verdict
 from core.tracking import Track
 
 from . import objects, vehicles
+from .baselines import BaselineReport, BaselineScorer
 from .counts import sum_fields
 from .mot import MotAccumulator, MotScore
 from .objects import BoxScore, MaskScore, PitchScore, RailScore
@@ -69,6 +70,8 @@ class RecordingReport:
     tracking: TrackingReport
     # paper 002's table I (None when not timed); a total holds each recording's
     guardrail_timing: tuple[tuple[str, GuardRailSavings], ...] = field(default=())
+    # core.baselines on the same frames (None when not asked for)
+    baselines: BaselineReport | None = None
 
 
 def _vehicle_estimates(result: FrameResult) -> list[Estimate]:
@@ -207,18 +210,25 @@ class _Scorer:
 
 
 def evaluate_recording(
-    path: Path | str, params: Params, progress: Progress | None = None, timing: bool = True
+    path: Path | str,
+    params: Params,
+    progress: Progress | None = None,
+    timing: bool = True,
+    baselines: bool = False,
 ) -> RecordingReport:
     """Play the recording at `path` through the engine and score it (module docstring);
-    timing: also time paper 002's table I (VD, GRD, OBM) on it, one thread.
-    RecordingError when it cannot be read; ValueError when it has no ground truth."""
-    with Drive(path) as drive:
+    timing: also time paper 002's table I (VD, GRD, OBM) on it, one thread; baselines:
+    also run and score core.baselines on the same frames (evaluation.baselines).
+    RecordingError when it cannot be read; ValueError when it has no ground truth. OpenCV
+    runs on one thread, so that the stage and baseline times are one thread's."""
+    with one_thread(), Drive(path) as drive:
         if not drive.has_truth:
             raise ValueError(
                 f"{drive.path}: expected a groundtruth.json to evaluate against, found none"
             )
         engine = FusionEngine(params, drive.camera)
         scorer = _Scorer(params)
+        baseline = BaselineScorer(params, drive.camera) if baselines else None
         calibrated = drive.camera.extrinsics.pitch_rad
         for i in range(len(drive)):
             frame = drive.frame(i)
@@ -226,9 +236,13 @@ def evaluate_recording(
             truth = drive.truth(i)
             if truth is not None:
                 scorer.add(frame, result, truth, calibrated)
+            if baseline is not None:
+                baseline.add(frame, result, truth, calibrated)
             if progress is not None:
                 progress(i + 1, len(drive))
         report = scorer.report(drive.path.name)
+        if baseline is not None:
+            report = dataclasses.replace(report, baselines=baseline.report())
         if timing and len(drive) >= 2:
             timed = guard_rail_savings(drive, params)
             report = dataclasses.replace(report, guardrail_timing=((report.name, timed),))
@@ -255,4 +269,7 @@ def total(reports: Sequence[RecordingReport]) -> RecordingReport:
         pitch=summed(lambda r: r.pitch),
         tracking=summed(lambda r: r.tracking),
         guardrail_timing=tuple(t for r in reports for t in r.guardrail_timing),
+        baselines=None
+        if any(r.baselines is None for r in reports)
+        else sum_fields([r.baselines for r in reports if r.baselines is not None]),
     )

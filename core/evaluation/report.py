@@ -5,8 +5,10 @@ with <figures> = {"frames", "vehicles": {"frames": {rd, fn, rfn, fp, nvo, framed
 each FN, RFN, FP, NVO happened as [frame, id] pairs}, "events": {events, radar_miss,
 not_refined, refined, refined_share, refined_share_of_radar_supplied}}, "guardrails",
 "pedestrians" (per filter: symmetry, motion_stereo, vehicles), "motion_stereo", "pitch",
-"tracking"}; shares are fractions 0-1 (null when undefined). The total carries counts
-only; frame listings stay with their recordings. CSV is the same figures flattened, one
+"tracking", and with --baselines "baselines": {"pedestrians", "pitch", "motion_stereo"},
+each the baseline beside the engine's figure with their median ms per frame}; shares are
+fractions 0-1 (null when undefined). The total carries counts only; frame listings stay
+with their recordings. CSV is the same figures flattened, one
 line per recording and figure (`recording,figure,value`), listings left out.
 """
 
@@ -22,12 +24,16 @@ from typing import Any
 
 from core.bench import PAPER_002_MS
 
+from .baselines import Timing
 from .evaluate import PEDESTRIAN_STAGES, RecordingReport
 from .mot import MotScore
-from .objects import BoxScore, RailScore
+from .objects import BoxScore, MaskScore, PitchScore, RailScore
 from .vehicles import EventStats, FrameStats
 
 TIMING_TITLE = "Guard rails: execution time per frame, ms, one thread (paper 002, table I)"
+BASELINE_TIMING_TITLE = "Baselines: ms per frame (median, one thread, the same frames)"
+# tables whose figures change from run to run
+TIMED_TITLES = (TIMING_TITLE, BASELINE_TIMING_TITLE)
 PEDESTRIAN_TITLES = {
     "symmetry": "symmetry alone",
     "motion_stereo": "+ motion stereo",
@@ -165,18 +171,9 @@ def figures_json(r: RecordingReport, listings: bool = True) -> dict[str, Any]:
         },
         "guardrails": {**_rails_json(r.guardrails, listings), "timing": _timing_json(r)},
         "pedestrians": {k: _boxes_json(b, listings) for k, b in r.pedestrians.items()},
-        "motion_stereo": {
-            "obstacles": ms.obstacles,
-            "obstacles_hit": ms.obstacles_hit,
-            "object_recall": _ratio(ms.obstacles_hit, ms.obstacles),
-            "pixel_recall": _ratio(ms.truth_marked_px, ms.truth_px),
-            "pixel_precision": _ratio(ms.marked_on_objects_px, ms.marked_px),
-            **({"missed_at": _pairs(ms.missed_at)} if listings else {}),
-        },
+        "motion_stereo": _mask_json(ms, listings),
         "pitch": {
-            "frames": len(pitch.errors_deg),
-            "rms_deg": _share(pitch.rms_deg),
-            "max_deg": _share(pitch.max_deg),
+            **_pitch_json(pitch),
             "calibration_rms_deg": _share(pitch.calibration_rms_deg),
         },
         "tracking": {
@@ -191,6 +188,55 @@ def figures_json(r: RecordingReport, listings: bool = True) -> dict[str, Any]:
             },
             "guardrails": _rails_json(t.guardrails, listings),
         },
+        **({} if r.baselines is None else {"baselines": _baselines_json(r, listings)}),
+    }
+
+
+def _mask_json(m: MaskScore, listings: bool) -> dict[str, Any]:
+    return {
+        "obstacles": m.obstacles,
+        "obstacles_hit": m.obstacles_hit,
+        "object_recall": _ratio(m.obstacles_hit, m.obstacles),
+        "pixel_recall": _ratio(m.truth_marked_px, m.truth_px),
+        "pixel_precision": _ratio(m.marked_on_objects_px, m.marked_px),
+        **({"missed_at": _pairs(m.missed_at)} if listings else {}),
+    }
+
+
+def _pitch_json(p: PitchScore) -> dict[str, Any]:
+    return {
+        "frames": len(p.errors_deg),
+        "rms_deg": _share(p.rms_deg),
+        "max_deg": _share(p.max_deg),
+    }
+
+
+def _ms(t: Timing) -> float | None:
+    return None if math.isnan(t.median_ms) else round(t.median_ms, 4)
+
+
+def _baselines_json(r: RecordingReport, listings: bool) -> dict[str, Any]:
+    b = r.baselines
+    assert b is not None
+    return {
+        "pedestrians": {
+            "hog": _boxes_json(b.hog, listings),
+            "hog_ms": _ms(b.hog_time),
+            "symmetry_ms": _ms(b.symmetry_time),
+        },
+        "pitch": {
+            "hough": {**_pitch_json(b.hough), "no_vanishing_point": b.hough_missing},
+            "hough_ms": _ms(b.hough_time),
+            "pitch_ms": _ms(b.pitch_time),
+        },
+        "motion_stereo": {
+            state: {
+                "motion_stereo": _mask_json(getattr(b.motion_stereo, state), listings),
+                "mog2": _mask_json(getattr(b.mog2, state), listings),
+            }
+            for state in ("moving", "still")
+        }
+        | {"motion_stereo_ms": _ms(b.motion_stereo_time), "mog2_ms": _ms(b.mog2_time)},
     }
 
 
@@ -369,6 +415,7 @@ def tables(
             ),
         ),
     ]
+    out += _baseline_tables(rows)
     for r in reports if listings else ():
         out.append(
             Table(
@@ -419,6 +466,92 @@ def _timing_tables(total: RecordingReport) -> list[Table]:
             (f"mean of reductions: {mean_reduction(total):.0%} (paper 002: 20 %)",),
         )
     ]
+
+
+def _baseline_tables(rows: Sequence[RecordingReport]) -> list[Table]:
+    pairs = [(r.name, r.baselines) for r in rows if r.baselines is not None]
+    if not pairs:
+        return []
+    by_name = {r.name: r for r in rows}
+    return [
+        Table(
+            "Baselines: pedestrians beside OpenCV's HOG people detector, recall / precision",
+            ("recording", "visible", "symmetry + both filters (paper 000)", "HOG"),
+            tuple(
+                (
+                    name,
+                    str(b.hog.visible),
+                    _rp(by_name[name].pedestrians["vehicles"]),
+                    _rp(b.hog),
+                )
+                for name, b in pairs
+            ),
+        ),
+        Table(
+            "Baselines: pitch beside a Hough-line vanishing point, error RMS / max deg",
+            ("recording", "edge clusters (paper 000)", "Hough", "frames without a Hough VP"),
+            tuple(
+                (
+                    name,
+                    _rms_max(by_name[name].pitch),
+                    _rms_max(b.hough),
+                    _pct(b.hough_missing, len(b.hough.errors_deg)),
+                )
+                for name, b in pairs
+            ),
+            ("without a vanishing point the Hough baseline keeps the calibrated pitch",),
+        ),
+        Table(
+            "Baselines: obstacle mask beside OpenCV's MOG2, "
+            "object recall / pixel recall / pixel precision",
+            (
+                "recording",
+                "moving: motion stereo (paper 000)",
+                "moving: MOG2",
+                "still: background subtraction",
+                "still: MOG2",
+            ),
+            tuple(
+                (
+                    name,
+                    _mask(b.motion_stereo.moving),
+                    _mask(b.mog2.moving),
+                    _mask(b.motion_stereo.still),
+                    _mask(b.mog2.still),
+                )
+                for name, b in pairs
+            ),
+            (
+                "moving: the car drives and MOG2 cannot undo its motion; still: it stands "
+                "and only moving objects count",
+            ),
+        ),
+        Table(
+            BASELINE_TIMING_TITLE,
+            ("recording", "symmetry / HOG", "pitch / Hough", "motion stereo / MOG2"),
+            tuple(
+                (
+                    name,
+                    f"{b.symmetry_time.median_ms:.2f} / {b.hog_time.median_ms:.2f}",
+                    f"{b.pitch_time.median_ms:.2f} / {b.hough_time.median_ms:.2f}",
+                    f"{b.motion_stereo_time.median_ms:.2f} / {b.mog2_time.median_ms:.2f}",
+                )
+                for name, b in pairs
+            ),
+        ),
+    ]
+
+
+def _rms_max(p: PitchScore) -> str:
+    return f"{p.rms_deg:.2f} / {p.max_deg:.2f}" if p.errors_deg else "-"
+
+
+def _mask(m: MaskScore) -> str:
+    if not m.obstacles and not m.marked_px:
+        return "-"
+    recall = f"{m.object_recall:.0%} / {m.pixel_recall:.0%}" if m.obstacles else "- / -"
+    precision = f"{m.pixel_precision:.0%}" if m.marked_px else "-"
+    return f"{recall} / {precision}"
 
 
 def _counts(s: FrameStats) -> str:

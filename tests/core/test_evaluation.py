@@ -1,9 +1,11 @@
 """The evaluation's statistics on hand-made truth and detections whose figures the tests work
-out, and `fusionscope evaluate` on a bundled drive (JSON keys and types, formats, bad input).
+out, and `fusionscope evaluate` on the bundled drives (JSON keys and types, formats, bad
+input, the baselines beside the engine, the README's tables).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass
@@ -13,6 +15,8 @@ import numpy as np
 import pytest
 
 from core.cli import DEFAULT_RECORDINGS, main
+from core.evaluation import report
+from core.evaluation.evaluate import RecordingReport, evaluate_recording, total
 from core.evaluation.mot import MotAccumulator
 from core.evaluation.objects import (
     RAIL_HEIGHT_M,
@@ -21,7 +25,7 @@ from core.evaluation.objects import (
     score_pitch,
     score_rails,
 )
-from core.evaluation.report import TIMING_TITLE
+from core.evaluation.report import BASELINE_TIMING_TITLE, TIMED_TITLES
 from core.evaluation.vehicles import (
     EVENT_MIN_FRAMES,
     Estimate,
@@ -32,7 +36,7 @@ from core.evaluation.vehicles import (
 )
 from core.io.frame import RadarTarget
 from core.io.groundtruth import FrameTruth, TruthObject
-from core.params import MotionStereoParams
+from core.params import MotionStereoParams, Params
 
 TOLERANCE_M = 0.4
 
@@ -363,21 +367,86 @@ README_BEGIN, README_END = "<!-- evaluate:begin -->\n", "<!-- evaluate:end -->\n
 BUNDLED = ("highway", "exurban", "stop_and_go")
 
 
+@pytest.fixture(scope="module")
+def bundled() -> list[RecordingReport]:
+    """The bundled drives evaluated with the baselines, as `fusionscope evaluate --baselines`."""
+    return [
+        evaluate_recording(DEFAULT_RECORDINGS / name, Params(), baselines=True) for name in BUNDLED
+    ]
+
+
 def _untimed(markdown: str) -> list[str]:
-    """The markdown's tables but the timed one, whose figures change from run to run."""
+    """The markdown's tables but the timed ones, whose figures change from run to run."""
     tables = [t.strip() for t in markdown.split("\n\n**")]
-    return [t for t in tables if TIMING_TITLE not in t]
+    return [t for t in tables if not any(title in t for title in TIMED_TITLES)]
 
 
-def test_the_readmes_tables_are_the_commands_output_today(
-    capsys: pytest.CaptureFixture[str],
-) -> None:
+def test_the_readmes_tables_are_the_commands_output_today(bundled: list[RecordingReport]) -> None:
     text = README.read_text(encoding="utf-8")
     block = text[text.index(README_BEGIN) + len(README_BEGIN) : text.index(README_END)]
-    paths = [str(DEFAULT_RECORDINGS / name) for name in BUNDLED]
-    assert main(["evaluate", *paths, "--format", "markdown"]) == 0
-    assert _untimed(block) == _untimed(capsys.readouterr().out), (
+    # what `_cmd_evaluate` prints for --format markdown
+    out = report.format_markdown(report.tables(bundled, total(bundled), listings=False))
+    assert _untimed(block) == _untimed(out), (
         "README.md's 'How good is it' tables are stale: paste the output of "
         "`fusionscope evaluate recordings/highway recordings/exurban recordings/stop_and_go "
-        "--format markdown` between its evaluate markers"
+        "--baselines --format markdown` between its evaluate markers"
     )
+    assert len(_untimed(out)) == len(out.split("\n\n**")) - len(TIMED_TITLES)
+
+
+def test_the_baselines_are_scored_on_the_engines_frames(bundled: list[RecordingReport]) -> None:
+    for r in bundled:
+        b = r.baselines
+        assert b is not None
+        # the same frames and the same truth as the engine's figures
+        assert len(b.hough.errors_deg) == len(b.hog_time.ms) == r.frames
+        assert b.hough.calibration_errors_deg == r.pitch.calibration_errors_deg
+        assert b.hog.visible == r.pedestrians["vehicles"].visible
+        assert b.hog.boxes == b.hog.true_boxes + len(b.hog.false_at)
+        # the engine's mask, split by whether the car moves, adds up to its figure
+        split = b.motion_stereo.moving + b.motion_stereo.still
+        assert dataclasses.replace(split, missed_at=tuple(sorted(split.missed_at))) == (
+            r.motion_stereo
+        )
+        masks = b.mog2.moving + b.mog2.still
+        assert masks.obstacles == r.motion_stereo.obstacles
+        assert len(b.mog2_time.ms) == len(b.motion_stereo_time.ms)
+        assert 0 < len(b.mog2_time.ms) < r.frames  # none on the first frame
+        assert all(t > 0 for t in b.hog_time.ms + b.hough_time.ms + b.mog2_time.ms)
+    # only stop_and_go stands still
+    assert [r.baselines.mog2.still.obstacles > 0 for r in bundled if r.baselines] == [
+        False,
+        False,
+        True,
+    ]
+    summed = total(bundled)
+    assert summed.baselines is not None
+    assert summed.baselines.hog.visible == sum(r.pedestrians["vehicles"].visible for r in bundled)
+
+
+def test_the_baselines_json_beside_the_engines(bundled: list[RecordingReport]) -> None:
+    figures = json.loads(json.dumps(report.as_json(bundled, total(bundled))))
+    for rec in [*figures["recordings"], figures["total"]]:
+        b = rec["baselines"]
+        hog = b["pedestrians"]["hog"]
+        # null where undefined: highway has no visible person
+        assert (hog["recall"] is None) == (hog["visible"] == 0)
+        assert all(hog[k] is None or 0.0 <= hog[k] <= 1.0 for k in ("recall", "precision"))
+        assert b["pedestrians"]["hog_ms"] > 0 and b["pedestrians"]["symmetry_ms"] > 0
+        assert isinstance(b["pitch"]["hough"]["rms_deg"], float)
+        assert isinstance(b["pitch"]["hough"]["no_vanishing_point"], int)
+        assert b["pitch"]["hough_ms"] > 0 and b["pitch"]["pitch_ms"] > 0
+        for state in ("moving", "still"):
+            assert set(b["motion_stereo"][state]) == {"motion_stereo", "mog2"}
+        assert b["motion_stereo"]["mog2_ms"] > 0
+    moving = figures["total"]["baselines"]["motion_stereo"]["moving"]
+    assert moving["motion_stereo"]["object_recall"] is not None
+    assert "missed_at" in figures["recordings"][0]["baselines"]["pedestrians"]["hog"]
+    assert "missed_at" not in figures["total"]["baselines"]["pedestrians"]["hog"]
+
+
+def test_baselines_on_the_command_line(capsys: pytest.CaptureFixture[str]) -> None:
+    path = str(DEFAULT_RECORDINGS / "stop_and_go")
+    assert main(["evaluate", path, "--baselines"]) == 0
+    out = capsys.readouterr().out
+    assert "HOG" in out and "Hough" in out and "MOG2" in out and BASELINE_TIMING_TITLE in out
