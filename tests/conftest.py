@@ -1,12 +1,17 @@
-"""Shared fixtures: the real recordings beside the project, and small synthetic drives."""
+"""Shared fixtures: the real recordings beside the project, small synthetic drives, and the
+bundled drives evaluated once for every test that reads their figures."""
 
 from __future__ import annotations
 
 import os
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
+
+if TYPE_CHECKING:
+    from core.evaluation.evaluate import RecordingReport
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 REALDATA_DIR = REPO_ROOT.parent / "shared" / "realdata"
@@ -84,3 +89,19 @@ def rav4(realdata: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     args += ["--max-radar-skew-ms", "50"]
     assert main(args) == 0
     return out
+
+
+BUNDLED = ("highway", "exurban", "stop_and_go")
+
+
+@pytest.fixture(scope="session")
+def bundled_reports() -> list[RecordingReport]:
+    """The bundled drives evaluated with the paper's parameters and the baselines, as
+    `fusionscope evaluate --baselines` does (core.evaluation.evaluate.RecordingReport)."""
+    from core.cli import DEFAULT_RECORDINGS
+    from core.evaluation.evaluate import evaluate_recording
+    from core.params import Params
+
+    return [
+        evaluate_recording(DEFAULT_RECORDINGS / name, Params(), baselines=True) for name in BUNDLED
+    ]

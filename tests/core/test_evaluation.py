@@ -16,7 +16,7 @@ import pytest
 
 from core.cli import DEFAULT_RECORDINGS, main
 from core.evaluation import report
-from core.evaluation.evaluate import RecordingReport, evaluate_recording, total
+from core.evaluation.evaluate import RecordingReport, total
 from core.evaluation.mot import MotAccumulator
 from core.evaluation.objects import (
     RAIL_HEIGHT_M,
@@ -36,7 +36,7 @@ from core.evaluation.vehicles import (
 )
 from core.io.frame import RadarTarget
 from core.io.groundtruth import FrameTruth, TruthObject
-from core.params import MotionStereoParams, Params
+from core.params import MotionStereoParams
 
 TOLERANCE_M = 0.4
 
@@ -364,15 +364,6 @@ def test_a_recording_without_ground_truth_is_refused(
 
 README = Path(__file__).resolve().parents[2] / "README.md"
 README_BEGIN, README_END = "<!-- evaluate:begin -->\n", "<!-- evaluate:end -->\n"
-BUNDLED = ("highway", "exurban", "stop_and_go")
-
-
-@pytest.fixture(scope="module")
-def bundled() -> list[RecordingReport]:
-    """The bundled drives evaluated with the baselines, as `fusionscope evaluate --baselines`."""
-    return [
-        evaluate_recording(DEFAULT_RECORDINGS / name, Params(), baselines=True) for name in BUNDLED
-    ]
 
 
 def _untimed(markdown: str) -> list[str]:
@@ -381,11 +372,15 @@ def _untimed(markdown: str) -> list[str]:
     return [t for t in tables if not any(title in t for title in TIMED_TITLES)]
 
 
-def test_the_readmes_tables_are_the_commands_output_today(bundled: list[RecordingReport]) -> None:
+def test_the_readmes_tables_are_the_commands_output_today(
+    bundled_reports: list[RecordingReport],
+) -> None:
     text = README.read_text(encoding="utf-8")
     block = text[text.index(README_BEGIN) + len(README_BEGIN) : text.index(README_END)]
     # what `_cmd_evaluate` prints for --format markdown
-    out = report.format_markdown(report.tables(bundled, total(bundled), listings=False))
+    out = report.format_markdown(
+        report.tables(bundled_reports, total(bundled_reports), listings=False)
+    )
     assert _untimed(block) == _untimed(out), (
         "README.md's 'How good is it' tables are stale: paste the output of "
         "`fusionscope evaluate recordings/highway recordings/exurban recordings/stop_and_go "
@@ -394,8 +389,10 @@ def test_the_readmes_tables_are_the_commands_output_today(bundled: list[Recordin
     assert len(_untimed(out)) == len(out.split("\n\n**")) - len(TIMED_TITLES)
 
 
-def test_the_baselines_are_scored_on_the_engines_frames(bundled: list[RecordingReport]) -> None:
-    for r in bundled:
+def test_the_baselines_are_scored_on_the_engines_frames(
+    bundled_reports: list[RecordingReport],
+) -> None:
+    for r in bundled_reports:
         b = r.baselines
         assert b is not None
         # the same frames and the same truth as the engine's figures
@@ -414,18 +411,20 @@ def test_the_baselines_are_scored_on_the_engines_frames(bundled: list[RecordingR
         assert 0 < len(b.mog2_time.ms) < r.frames  # none on the first frame
         assert all(t > 0 for t in b.hog_time.ms + b.hough_time.ms + b.mog2_time.ms)
     # only stop_and_go stands still
-    assert [r.baselines.mog2.still.obstacles > 0 for r in bundled if r.baselines] == [
+    assert [r.baselines.mog2.still.obstacles > 0 for r in bundled_reports if r.baselines] == [
         False,
         False,
         True,
     ]
-    summed = total(bundled)
+    summed = total(bundled_reports)
     assert summed.baselines is not None
-    assert summed.baselines.hog.visible == sum(r.pedestrians["vehicles"].visible for r in bundled)
+    assert summed.baselines.hog.visible == sum(
+        r.pedestrians["vehicles"].visible for r in bundled_reports
+    )
 
 
-def test_the_baselines_json_beside_the_engines(bundled: list[RecordingReport]) -> None:
-    figures = json.loads(json.dumps(report.as_json(bundled, total(bundled))))
+def test_the_baselines_json_beside_the_engines(bundled_reports: list[RecordingReport]) -> None:
+    figures = json.loads(json.dumps(report.as_json(bundled_reports, total(bundled_reports))))
     for rec in [*figures["recordings"], figures["total"]]:
         b = rec["baselines"]
         hog = b["pedestrians"]["hog"]
