@@ -400,6 +400,73 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    import json
+
+    from core import sweep
+    from core.evaluation.report import format_text
+    from core.io.errors import RecordingError
+
+    command = "fusionscope sweep"
+    if args.scheduler is not None and args.workers is not None:
+        print(
+            f"{command}: --workers: only without --scheduler (a running cluster has its own)",
+            file=sys.stderr,
+        )
+        return 2
+    workers = args.workers or sweep.DEFAULT_WORKERS
+    bar = ProgressBar("sweep")
+    running = False  # the bar's line is open
+    try:
+        if args.metric is not None:
+            try:
+                sweep.check_metric(args.metric)
+            except sweep.SweepError as err:
+                raise sweep.SweepError(f"--metric: {err}") from None
+        spec = sweep.load_sweep(args.sweep, args.metric, args.goal)
+        recordings = list(dict.fromkeys(sweep.recording_key(r) for r in args.recordings))
+        every = sweep.tasks(spec, recordings)
+        with sweep.ResultsFile(args.results) as results:
+            for warning in results.warnings:
+                print(f"{command}: warning: {warning}", file=sys.stderr)
+            todo = sweep.pending(every, results.results)
+            done = len(every) - len(todo)
+            wanted = {(t.set.id, t.recording) for t in every}
+            others = sum((r.set_id, r.recording) not in wanted for r in results.results)
+            on = args.scheduler or f"a local cluster of {workers} workers"
+            print(
+                f"{command}: {len(spec.sets)} parameter sets x {len(recordings)} recordings = "
+                f"{len(every)} tasks; {done} already in {results.path}"
+                + (f" (and {others} of other sets or recordings, left out)" if others else "")
+                + f", {len(todo)} to run"
+                + (f" on {on}" if todo else ""),
+                file=sys.stderr,
+            )
+            if todo:
+                running = True
+                bar(done, len(every))
+                with sweep.connect(args.scheduler, workers) as client:
+                    sweep.run(client, todo, results, lambda k, n: bar(done + k, done + n))
+                running = False
+            ranked = sweep.rank(spec, recordings, results.results)
+    except KeyboardInterrupt:
+        print(
+            f"\n{command}: interrupted; the finished tasks are in {args.results}: the same "
+            "command resumes",
+            file=sys.stderr,
+        )
+        return 130
+    except (ValueError, RecordingError, OSError) as err:
+        print(("\n" if running else "") + f"{command}: {err}", file=sys.stderr)
+        return 2
+    shown = ranked[: args.top]
+    if args.format == "json":
+        print(json.dumps(sweep.as_json(spec, shown, recordings), indent=1))
+    else:
+        sys.stdout.write(format_text([sweep.table(spec, shown, len(ranked))]))
+    return 0
+
+
 def _cmd_synth(args: argparse.Namespace) -> int:
     from core.io.errors import RecordingError
     from core.synth.generate import generate
@@ -800,6 +867,62 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument("--format", choices=("table", "json"), default="table")
     bench.set_defaults(func=_cmd_bench)
+
+    sweep = sub.add_parser(
+        "sweep",
+        help="evaluate many parameter sets on many recordings on Dask and rank the sets",
+        description=_paragraph(
+            "Evaluate every parameter set of SWEEP.yaml (a grid or a seeded random sample of "
+            "named parameters) on every recording, one Dask task per recording and set, on a "
+            "local cluster or, with --scheduler, on a running Dask cluster. Each finished "
+            "task is appended to the --results file at once; run the same command again to "
+            "resume an interrupted sweep: the tasks in the file do not run again. At the end, "
+            "the sets ranked by one figure of their total over the recordings, each with its "
+            "worst frames. Needs Dask: pip install -e '.[cluster]'. The sweep file's format: "
+            "README, 'Parameter sweeps'."
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sweep.add_argument("sweep", type=Path, metavar="SWEEP.yaml", help="the sweep file")
+    sweep.add_argument(
+        "recordings", nargs="+", metavar="RECORDING", help="recording folders (with ground truth)"
+    )
+    sweep.add_argument(
+        "--results",
+        type=Path,
+        required=True,
+        metavar="FILE",
+        help="JSON-lines file of the finished tasks: read first, then appended to",
+    )
+    sweep.add_argument(
+        "--metric",
+        metavar="DOTTED",
+        help="the figure ranked on, a dotted name of `evaluate --format json`'s total "
+        "(default: the sweep file's, else vehicles.events.refined_share)",
+    )
+    sweep.add_argument(
+        "--goal", choices=("max", "min"), help="best is highest or lowest (default: max)"
+    )
+    sweep.add_argument(
+        "--scheduler",
+        metavar="tcp://HOST:PORT",
+        help="a running Dask scheduler (default: a local cluster started for the sweep)",
+    )
+    sweep.add_argument(
+        "--workers",
+        metavar="N",
+        type=_int_at_least(1),
+        help="worker processes of the local cluster, one thread each (default: 2)",
+    )
+    sweep.add_argument(
+        "--top",
+        metavar="K",
+        type=_int_at_least(1),
+        default=10,
+        help="sets shown (default: %(default)s)",
+    )
+    sweep.add_argument("--format", choices=("table", "json"), default="table")
+    sweep.set_defaults(func=_cmd_sweep)
 
     synth = sub.add_parser("synth", help="generate a synthetic drive with exact ground truth")
     synth.add_argument("--scenario", required=True, choices=sorted(SCENARIOS))
