@@ -85,6 +85,10 @@ class BaselineReport:
         return add_fields(self, other)
 
 
+def _split(score: MaskScore, still: bool) -> MaskSplit:
+    return MaskSplit(still=score) if still else MaskSplit(moving=score)
+
+
 def _timed(call: Callable[[], T]) -> tuple[T, float]:
     start = time.perf_counter()
     value = call()
@@ -120,23 +124,15 @@ class BaselineScorer:
         hough, hough_ms = _timed(lambda: hough_pitch(image, self.camera))
         pitch_rad = calibrated_rad if hough.pitch_rad is None else hough.pitch_rad
         lo, hi = p.pedestrian.min_distance_m, p.pedestrian.max_distance_m
-        split = MaskSplit(), MaskSplit()
+        engine, mog2 = MaskSplit(), MaskSplit()
         mask_times = Timing(), Timing()
         ms = result.motion_stereo
         if ms.mode in ("motion_stereo", "background_subtraction"):
             still = ms.mode == "background_subtraction"
             first = ms.image_mask_first_row_px
             engine, mog2 = (
-                objects.score_mask(i, m, first, truth, p.motion_stereo, still)
+                _split(objects.score_mask(i, m, first, truth, p.motion_stereo, still), still)
                 for m in (ms.image_mask, mask[first : first + len(ms.image_mask)])
-            )
-            split = (
-                (MaskSplit(still=engine), MaskSplit(still=mog2))
-                if still
-                else (
-                    MaskSplit(moving=engine),
-                    MaskSplit(moving=mog2),
-                )
             )
             mask_times = Timing((timings.motion_stereo_ms,)), Timing((mog2_ms,))
         self.frames.append(
@@ -148,8 +144,8 @@ class BaselineScorer:
                 hough_missing=int(hough.pitch_rad is None),
                 hough_time=Timing((hough_ms,)),
                 pitch_time=Timing((timings.pitch_ms,)),
-                motion_stereo=split[0],
-                mog2=split[1],
+                motion_stereo=engine,
+                mog2=mog2,
                 motion_stereo_time=mask_times[0],
                 mog2_time=mask_times[1],
             )
