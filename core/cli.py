@@ -435,7 +435,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             others = sum((r.set_id, r.recording) not in wanted for r in results.results)
             on = args.scheduler or f"a local cluster of {workers} workers"
             print(
-                f"{command}: {len(spec.sets)} parameter sets x {len(recordings)} recordings = "
+                f"{command}: {len(spec.sets)} parameter sets x {len(recordings)} recording(s) = "
                 f"{len(every)} tasks; {done} already in {results.path}"
                 + (f" (and {others} of other sets or recordings, left out)" if others else "")
                 + f", {len(todo)} to run"
@@ -443,9 +443,9 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
             if todo:
-                running = True
-                bar(done, len(every))
                 with sweep.connect(args.scheduler, workers) as client:
+                    running = True
+                    bar(done, len(every))
                     sweep.run(client, todo, results, lambda k, n: bar(done + k, done + n))
                 running = False
             ranked = sweep.rank(spec, recordings, results.results)
