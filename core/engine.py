@@ -39,6 +39,7 @@ from typing import Protocol, TypeVar
 from core.camera import CameraModel
 from core.ego import NS_PER_S
 from core.guardrail import GuardRailResult, detect_guard_rails
+from core.io.errors import RecordingError
 from core.io.frame import FrameInput
 from core.motion_stereo import MotionStereo, MotionStereoResult, frames_to_forget
 from core.params import Params
@@ -199,16 +200,24 @@ class FusionEngine:
 
     def seek(self, frames: Frames, index: int) -> FrameResult:
         """The result of frame `index` of `frames`: processed next when it follows the last
-        frame, otherwise after a reset and a replay of up to `replay_window` frames."""
+        frame, otherwise after a reset and a replay of up to `replay_window` frames. A
+        replayed frame that cannot be read (RecordingError) resets the state again, as a
+        gap in the drive would; the wanted frame's own RecordingError passes through."""
         if not 0 <= index < len(frames):
             raise ValueError(f"index: expected a frame 0..{len(frames) - 1}, got {index}")
         if self.last_index is not None and index == self.last_index + 1:
             return self.process(frames.frame(index))
+        wanted = frames.frame(index)
         self.reset()
         first = max(0, index - replay_window(self.params))
         for i in range(first, index):
-            self.process(frames.frame(i))
-        result = self.process(frames.frame(index))
+            try:
+                frame = frames.frame(i)
+            except RecordingError:
+                self.reset()
+                continue
+            self.process(frame)
+        result = self.process(wanted)
         return replace(result, replayed=index - first)
 
     def process(self, frame: FrameInput) -> FrameResult:

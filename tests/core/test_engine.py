@@ -18,6 +18,8 @@ import pytest
 from core.cli import DEFAULT_RECORDINGS, main
 from core.engine import FrameResult, FusionEngine, replay_window
 from core.io.drive import Drive
+from core.io.errors import RecordingError
+from core.io.frame import FrameInput
 from core.params import Params
 from tests.core.playback import playback
 
@@ -102,6 +104,33 @@ def test_seeking_the_next_frame_processes_just_it() -> None:
         assert jumped.tracking.tracks == () or all(t.age == 1 for t in jumped.tracking.tracks)
         with pytest.raises(ValueError, match="index"):
             engine.seek(drive, len(drive))
+
+
+def test_a_seek_past_a_frame_that_cannot_be_read_replays_from_after_it() -> None:
+    class Damaged:
+        def __init__(self, drive: Drive, bad: int) -> None:
+            self.drive, self.bad = drive, bad
+
+        def __len__(self) -> int:
+            return len(self.drive)
+
+        def frame(self, i: int) -> FrameInput:
+            if i == self.bad:
+                raise RecordingError(f"frame {i} is not a PNG")
+            return self.drive.frame(i)
+
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        damaged = Damaged(drive, 35)
+        engine = FusionEngine(Params(), drive.camera)
+        result = engine.seek(damaged, 40)
+        clean = FusionEngine(Params(), drive.camera)
+        for i in range(36, 41):  # what the replay amounts to: a start after the damaged frame
+            expected = clean.process(drive.frame(i))
+        assert result.index == 40 and result.replayed == replay_window(Params())
+        assert np.array_equal(result.motion_stereo.obstacles, expected.motion_stereo.obstacles)
+        assert result.pitch.pitch_rad == expected.pitch.pitch_rad
+        with pytest.raises(RecordingError, match="frame 35"):
+            engine.seek(damaged, 35)
 
 
 def test_fusionscope_run_writes_a_line_per_frame(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
