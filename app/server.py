@@ -20,6 +20,7 @@ from pathlib import Path
 import viser
 
 from app.catalog import list_recordings, resolve_recording
+from app.engines import ClientEngines, FrameCache
 from app.session import ClientSession
 from app.state import ViewState
 from app.view import FrameSource, FrameView, render_view
@@ -41,7 +42,8 @@ def open_drive(path: Path) -> FrameSource:
 @dataclass
 class _OpenDrive:
     drive: FrameSource
-    worker: RenderWorker[int, ViewState, FrameView | RecordingError]
+    engines: ClientEngines
+    worker: RenderWorker[int, ViewState, FrameView | Exception]
 
 
 class InspectorServer:
@@ -126,6 +128,7 @@ class InspectorServer:
             session.close()
         for entry in drives:
             entry.worker.forget(client.client_id)
+            entry.engines.forget(client.client_id)
 
     def _show_recording(self, session: ClientSession, name: str) -> None:
         try:
@@ -155,23 +158,33 @@ class InspectorServer:
             if name in self._drives:
                 return self._drives[name]
             drive = self._open_drive(resolve_recording(self.recordings_root, name))
+            frames = FrameCache(drive)
+            engines = ClientEngines(drive.camera)
 
-            def render(state: ViewState) -> FrameView | RecordingError:
+            def render(client_id: int, state: ViewState) -> FrameView | Exception:
                 try:
-                    return render_view(drive, state)
+                    result = engines.result(client_id, frames, state.params, state.frame)
+                    return render_view(drive, state, result, frames.frame(state.frame))
                 except RecordingError as err:  # a damaged frame: say so on the page
                     return err
+                except Exception as err:  # the page says so; the log keeps the traceback
+                    log.exception("engine on frame %d of %s failed", state.frame, name)
+                    return err
 
-            def publish(client_id: int, state: ViewState, view: FrameView | RecordingError) -> None:
+            def publish(client_id: int, state: ViewState, view: FrameView | Exception) -> None:
                 session = self._sessions.get(client_id)
                 if session is None:
                     return
                 if isinstance(view, RecordingError):
-                    session.show_frame_error(name, state.frame, str(view))
+                    session.show_frame_error(name, state.frame, "cannot be read", str(view))
+                elif isinstance(view, Exception):
+                    why = f"{type(view).__name__}: {view}"
+                    session.show_frame_error(name, state.frame, "failed in the engine", why)
                 else:
                     session.show_view(name, view)
 
-            entry = _OpenDrive(drive, RenderWorker(render, publish, name=f"render-{name}"))
+            worker = RenderWorker(render, publish, name=f"render-{name}")
+            entry = _OpenDrive(drive, engines, worker)
             self._drives[name] = entry
             return entry
 

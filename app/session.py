@@ -1,7 +1,8 @@
-"""One browser tab: its controls, its `ViewState`, its playback thread, its camera panel.
+"""One browser tab: its controls, its `ViewState`, its playback thread, its panels.
 
-Controls only replace the state and ask for a render; the render worker draws, and
-`show_view` puts a finished picture and its read-out on the page in one atomic update.
+Controls only replace the state and ask for a render; the render worker runs the engine and
+draws, and `show_view` puts the finished pictures, read-out and timings on the page in one
+atomic update.
 """
 
 from __future__ import annotations
@@ -12,12 +13,25 @@ from dataclasses import replace
 
 import viser
 
+from app.params_panel import ParamsPanel
 from app.state import Layers, ViewState
-from app.view import FrameView
+from app.view import FrameView, timings_markdown
+from core.params import Params, ParamsError
 
 CAMERA_PANEL_WIDTH_PX = 680
 WAITING_TEXT = "rendering…"
 MARKDOWN_SPECIALS = "\\`*_{}[]<>()#+-.!|~"
+LAYER_LABELS = {
+    "radar": "radar targets",
+    "areas": "search areas",
+    "vehicles": "vehicles",
+    "guardrails": "guard rails",
+    "pedestrians": "pedestrians",
+    "strip": "pedestrian strip",
+    "horizon": "horizon and pitch",
+    "tracks": "track ids",
+    "truth": "ground truth",
+}
 
 
 def _escape_markdown(text: str) -> str:
@@ -68,19 +82,22 @@ class ClientSession:
 
         with gui.add_folder("Layers", order=3):
             self._layer_boxes = {
-                "radar": gui.add_checkbox("radar", self._state.layers.radar),
-                "truth": gui.add_checkbox("ground truth", self._state.layers.truth),
-                "horizon": gui.add_checkbox("horizon", self._state.layers.horizon),
+                name: gui.add_checkbox(LAYER_LABELS[name], getattr(self._state.layers, name))
+                for name in Layers.names()
             }
         for box in self._layer_boxes.values():
             box.on_update(lambda _: self._set_layers())
+        self._params_panel = ParamsPanel(gui, self.set_parameter, self.reset_parameters, order=4)
 
         gui.main_panel.dock_left()
         self._camera_panel = gui.add_panel()
         self._camera_tab = self._camera_panel.add_tab("Camera")
+        self._timings_tab = self._camera_panel.add_tab("Timings")
         self._camera_panel.dock_right()
         self._camera_panel.set_width(CAMERA_PANEL_WIDTH_PX)
         self._image: viser.GuiImageHandle | None = None
+        self._timings: viser.GuiMarkdownHandle | None = None
+        self._panel_images: dict[str, viser.GuiImageHandle] = {}
 
     # --- what the server tells this client ----------------------------------------------
     def show_error(self, headline: str, detail: str = "") -> None:
@@ -136,19 +153,30 @@ class ClientSession:
         """Put a rendered frame and its read-out on the page together (if still wanted)."""
         if recording != self.recording or self._readout is None:
             return
+        gui = self.client.gui
         with self.client.atomic():
             if self._image is None:
                 with self._camera_tab:
-                    self._image = self.client.gui.add_image(view.image, format="jpeg")
+                    self._image = gui.add_image(view.image, format="jpeg")
+                with self._timings_tab:
+                    self._timings = gui.add_markdown("")
             else:
                 self._image.image = view.image
+            for title, image in view.panels:
+                if title in self._panel_images:
+                    self._panel_images[title].image = image
+                else:
+                    with self._camera_panel.add_tab(title):
+                        self._panel_images[title] = gui.add_image(image, format="jpeg")
+            if self._timings is not None:
+                self._timings.content = timings_markdown(view.timings)
             self._readout.content = f"`{view.readout}`"
 
-    def show_frame_error(self, recording: str, frame: int, message: str) -> None:
-        """Say in the read-out that `frame` could not be read (the image keeps the last frame)."""
+    def show_frame_error(self, recording: str, frame: int, what: str, message: str) -> None:
+        """Say in the read-out what went wrong with `frame` (the image keeps the last frame)."""
         if recording != self.recording or self._readout is None:
             return
-        self._readout.content = f"**frame {frame} cannot be read:** {_escape_markdown(message)}"
+        self._readout.content = f"**frame {frame} {what}:** {_escape_markdown(message)}"
 
     # --- controls -> state ----------------------------------------------------------------
     def go_to(self, frame: int) -> None:
@@ -190,6 +218,26 @@ class ClientSession:
             self._play.label = "Pause" if playing else "Play"
             self._play.icon = viser.Icon.PLAYER_PAUSE if playing else viser.Icon.PLAYER_PLAY
 
+    def set_parameter(self, dotted: str, value: object) -> None:
+        """Run the engine with one parameter changed; a value the parameters refuse is
+        reported on the page and the field goes back to the value in use."""
+        with self._lock:
+            current = self._state.params
+        try:
+            params = current.with_value(dotted, value)
+        except ParamsError as err:
+            self.client.add_notification(
+                f"{dotted}: value refused", str(err), color="red", auto_close_seconds=8.0
+            )
+            self._params_panel.show(current)
+            return
+        self._set_params(params)
+
+    def reset_parameters(self) -> None:
+        """Every parameter back to the papers' value."""
+        self._set_params(Params())
+        self._params_panel.show(Params())
+
     def close(self) -> None:
         """The client left: stop playback."""
         self._stop_playing.set()
@@ -203,11 +251,13 @@ class ClientSession:
                 return
             self.step(+1)
 
+    def _set_params(self, params: Params) -> None:
+        with self._lock:
+            self._state = replace(self._state, params=params)
+        self._submit()
+
     def _set_layers(self) -> None:
-        boxes = self._layer_boxes
-        layers = Layers(
-            radar=boxes["radar"].value, truth=boxes["truth"].value, horizon=boxes["horizon"].value
-        )
+        layers = Layers(**{name: box.value for name, box in self._layer_boxes.items()})
         with self._lock:
             self._state = replace(self._state, layers=layers)
         self._submit()
@@ -226,6 +276,9 @@ class ClientSession:
             self._frame_count = 0
         if self._timeline is not None:
             self._timeline.remove()
-        if self._image is not None:
-            self._image.remove()
+        for handle in (self._image, self._timings, *self._panel_images.values()):
+            if handle is not None:
+                handle.remove()
+        self._panel_images = {}
         self._timeline = self._slider = self._play = self._readout = self._image = None
+        self._timings = None

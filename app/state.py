@@ -1,4 +1,5 @@
-"""What one browser tab is looking at: the frame, whether it plays, which layers are shown.
+"""What one browser tab is looking at: the frame, whether it plays, which layers are shown,
+and the parameter set the engine runs with.
 
 The state is a small frozen value; controls replace it with `dataclasses.replace` and the
 renderer only ever sees a snapshot, so a frame's image and its overlays always agree.
@@ -6,25 +7,39 @@ renderer only ever sees a snapshot, so a frame's image and its overlays always a
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
+
+from core.params import Params
 
 
 @dataclass(frozen=True)
 class Layers:
     """Which overlays are drawn on the camera image."""
 
-    radar: bool = True
-    truth: bool = True
-    horizon: bool = True
+    radar: bool = True  # radar crosses, coloured by what each target did
+    areas: bool = False  # the search areas of the radar targets
+    vehicles: bool = True  # vehicle boxes by verdict
+    guardrails: bool = True  # guard-rail lines and areas skipped by overlap
+    pedestrians: bool = True  # pedestrian boxes kept and rejected
+    strip: bool = False  # the pedestrian search strip
+    horizon: bool = True  # horizon, vanishing point and the pitch detector's lines
+    tracks: bool = True  # track ids
+    truth: bool = False  # ground truth, when the drive has it
+
+    @staticmethod
+    def names() -> tuple[str, ...]:
+        return tuple(f.name for f in fields(Layers))
 
 
 @dataclass(frozen=True)
 class ViewState:
-    """Per-client view: frame index into the drive, playback flag, overlay layers."""
+    """Per-client view: frame index into the drive, playback flag, overlay layers, and the
+    parameters the engine runs with."""
 
     frame: int = 0
     playing: bool = False
     layers: Layers = field(default_factory=Layers)
+    params: Params = field(default_factory=Params)
 
     def __post_init__(self) -> None:
         if self.frame < 0:

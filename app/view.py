@@ -1,8 +1,9 @@
-"""One rendered camera panel: a frame with the layers a client asked for, and its read-out.
+"""One rendered frame for one client: the camera image with the engine's overlays, the stage
+panels and the read-out, all from the same `FrameResult`.
 
-`render_view` is what the render worker runs: it reads the frame and its ground truth from
-the drive, draws with `app.draw`, and returns image and text together, so a frame's picture
-is never published with another frame's read-out.
+`render_view` is what the render worker runs after the engine: it draws with `app.draw`,
+`app.overlays` and `app.panels` and returns everything together, so a frame's picture is
+never published with another frame's overlays or read-out.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import numpy.typing as npt
 from app import draw
 from app.state import ViewState
 from core.camera import CameraModel
+from core.engine import FrameResult, StageTimings
 from core.io.frame import FrameInput
 from core.io.groundtruth import FrameTruth
 
@@ -48,11 +50,14 @@ class FrameSource(Protocol):
 
 @dataclass(frozen=True, eq=False)
 class FrameView:
-    """A rendered camera panel: frame index, (H + strip, W, 3) uint8 RGB picture, read-out."""
+    """A rendered frame: its index, the (H + strip, W, 3) uint8 RGB camera picture, the
+    read-out line, the engine's stage timings, and the stage panels as (title, RGB image)."""
 
     frame: int
     image: draw.RgbImage
     readout: str
+    timings: StageTimings
+    panels: tuple[tuple[str, draw.RgbImage], ...] = ()
 
 
 def readout_text(
@@ -71,22 +76,37 @@ def readout_text(
     return f"frame {index} / {count - 1} | t {t_s:.2f} s | {speed} | {yaw}"
 
 
-def render_view(drive: FrameSource, state: ViewState) -> FrameView:
-    """The camera panel for `state.frame` of `drive` with the layers of `state`.
+def timings_markdown(t: StageTimings) -> str:
+    """This frame's stage times as a markdown table."""
+    rows = [
+        ("pitch", t.pitch_ms),
+        ("motion stereo", t.motion_stereo_ms),
+        ("search areas + guard rails", t.guardrail_ms),
+        ("vehicles", t.vehicle_ms),
+        ("pedestrians", t.pedestrian_ms),
+        ("tracking", t.tracking_ms),
+        ("**total**", t.total_ms),
+    ]
+    return "| stage | ms |\n| --- | ---: |\n" + "\n".join(f"| {n} | {ms:.2f} |" for n, ms in rows)
 
-    Raises IndexError when the frame is outside the drive; reader errors pass through.
-    """
-    count = len(drive)
-    if not 0 <= state.frame < count:
-        raise IndexError(f"frame: expected an index in [0, {count}), got {state.frame}")
-    frame = drive.frame(state.frame)
+
+def render_view(
+    drive: FrameSource, state: ViewState, result: FrameResult, frame: FrameInput
+) -> FrameView:
+    """Frame `state.frame` of `drive` (`frame`, and the engine's `result` on it) with the
+    layers of `state`. Raises ValueError when `result` or `frame` is of another frame."""
+    if not (result.index == frame.index == state.frame):
+        raise ValueError(
+            f"result, frame: expected frame {state.frame}, got {result.index} and {frame.index}"
+        )
+    layers = state.layers
     rgb = draw.grey_to_rgb(frame.image)
-    if state.layers.horizon:
-        rgb = draw.draw_horizon(rgb, drive.camera)
-    if state.layers.truth:
+    if layers.horizon:
+        rgb = draw.draw_horizon(rgb, result.camera)
+    if layers.truth:
         rgb = draw.draw_truth(rgb, drive.truth(state.frame))
-    if state.layers.radar:
-        rgb = draw.draw_radar(rgb, frame.radar, drive.camera)
+    if layers.radar:
+        rgb = draw.draw_radar(rgb, frame.radar, result.camera)
     t_s = (frame.t_ns - int(drive.times_ns[0])) / NS_PER_S
-    text = readout_text(state.frame, count, t_s, frame.speed_mps, frame.yaw_rate_radps)
-    return FrameView(state.frame, draw.add_caption(rgb, text), text)
+    text = readout_text(state.frame, len(drive), t_s, frame.speed_mps, frame.yaw_rate_radps)
+    return FrameView(state.frame, draw.add_caption(rgb, text), text, result.timings)

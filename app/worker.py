@@ -21,7 +21,8 @@ log = logging.getLogger(__name__)
 
 
 class RenderWorker(Generic[Key, Request, Result]):
-    """Runs `render(request)` on a background thread, then `publish(key, request, result)`.
+    """Runs `render(key, request)` on a background thread, then `publish(key, request,
+    result)`.
 
     `submit(key, request)` never blocks; of the requests submitted for one key while the
     worker is busy only the last is rendered. Keys (clients) are served in the order their
@@ -31,7 +32,7 @@ class RenderWorker(Generic[Key, Request, Result]):
 
     def __init__(
         self,
-        render: Callable[[Request], Result],
+        render: Callable[[Key, Request], Result],
         publish: Callable[[Key, Request, Result], None],
         name: str = "render-worker",
     ) -> None:
@@ -75,6 +76,6 @@ class RenderWorker(Generic[Key, Request, Result]):
         while (job := self._next()) is not None:
             key, request = job
             try:
-                self._publish(key, request, self._render(request))
+                self._publish(key, request, self._render(key, request))
             except Exception:  # a bad frame must not end the worker
                 log.exception("render of %r for %r failed", request, key)

@@ -2,13 +2,17 @@ from __future__ import annotations
 
 import pytest
 
-from app.state import ViewState
+from app.state import Layers, ViewState
+from core.params import Params
 
 
-def test_state_starts_at_frame_zero_paused_with_all_layers() -> None:
+def test_state_starts_at_frame_zero_paused_with_the_papers_parameters() -> None:
     state = ViewState()
     assert (state.frame, state.playing) == (0, False)
-    assert state.layers.radar and state.layers.truth and state.layers.horizon
+    assert state.layers.radar and state.layers.vehicles and state.layers.horizon
+    assert not state.layers.truth  # the engine's output first; truth on request
+    assert state.params == Params()
+    assert Layers.names()[0] == "radar" and len(Layers.names()) == 9
 
 
 def test_negative_frame_is_refused() -> None:

@@ -1,4 +1,5 @@
-"""The camera panel of one frame: its picture and read-out come from the same frame."""
+"""One rendered frame: its picture, panels and read-out come from the same frame and the
+engine's result on it."""
 
 from __future__ import annotations
 
@@ -7,8 +8,15 @@ import pytest
 from app_fakes import HEIGHT_PX, FakeDrive
 
 from app import draw
+from app.engines import ClientEngines, FrameCache
 from app.state import Layers, ViewState
-from app.view import readout_text, render_view
+from app.view import FrameView, readout_text, render_view, timings_markdown
+from core.params import Params
+
+
+def _view(drive: FakeDrive, state: ViewState) -> FrameView:
+    result = ClientEngines(drive.camera).result("tab", drive, state.params, state.frame)
+    return render_view(drive, state, result, drive.frame(state.frame))
 
 
 def test_readout_gives_frame_time_speed_and_yaw_rate_in_display_units() -> None:
@@ -21,23 +29,54 @@ def test_readout_without_can_says_not_available() -> None:
     assert text == "frame 0 / 0 | t 0.00 s | speed n/a | yaw n/a"
 
 
-def test_view_of_a_frame_carries_that_frames_index_and_time() -> None:
+def test_view_of_a_frame_carries_that_frames_index_time_and_timings() -> None:
     drive = FakeDrive(frames=10)
-    view = render_view(drive, ViewState(frame=2))
+    view = _view(drive, ViewState(frame=2))
     assert view.frame == 2
     assert view.readout.startswith("frame 2 / 9 | t 0.08 s")
     assert view.image.shape == (HEIGHT_PX + draw.STRIP_HEIGHT_PX, 640, 3)
+    table = timings_markdown(view.timings)
+    assert "| **total** |" in table and table.count("\n") == 8
 
 
 def test_view_without_layers_shows_the_plain_frame() -> None:
     drive = FakeDrive()
-    off = Layers(radar=False, truth=False, horizon=False)
-    view = render_view(drive, ViewState(frame=1, layers=off))
+    off = Layers(**dict.fromkeys(Layers.names(), False))
+    view = _view(drive, ViewState(frame=1, layers=off))
     np.testing.assert_array_equal(view.image[:HEIGHT_PX], draw.grey_to_rgb(drive.frame(1).image))
-    on = render_view(drive, ViewState(frame=1))
+    on = _view(drive, ViewState(frame=1))
     assert (on.image != view.image).any()
 
 
-def test_view_of_a_frame_outside_the_drive_is_refused() -> None:
-    with pytest.raises(IndexError, match=r"frame: expected an index in \[0, 10\), got 10"):
-        render_view(FakeDrive(frames=10), ViewState(frame=10))
+def test_a_result_of_another_frame_is_refused() -> None:
+    drive = FakeDrive(frames=10)
+    result = ClientEngines(drive.camera).result("tab", drive, Params(), 3)
+    with pytest.raises(ValueError, match="expected frame 4, got 3 and 4"):
+        render_view(drive, ViewState(frame=4), result, drive.frame(4))
+
+
+def test_an_engine_per_client_and_the_last_result_again_for_a_redraw() -> None:
+    drive = FakeDrive(frames=10)
+    engines = ClientEngines(drive.camera)
+    first = engines.result("a", drive, Params(), 5)
+    assert engines.result("a", drive, Params(), 5) is first  # a layer toggled: no rerun
+    assert engines.result("a", drive, Params(), 6).replayed == 0  # the next frame
+    assert engines.result("b", drive, Params(), 6).replayed == 6  # b's own engine: a seek
+    changed = Params().with_value("pitch.lines_kept", 3)
+    again = engines.result("a", drive, changed, 6)
+    assert again.replayed == 6 and again is not first  # new parameters: replayed
+
+
+def test_the_frame_cache_keeps_the_last_frames_read() -> None:
+    class Counting(FakeDrive):
+        reads = 0
+
+        def frame(self, index: int):  # type: ignore[no-untyped-def]
+            Counting.reads += 1
+            return super().frame(index)
+
+    cache = FrameCache(Counting(frames=10), size=3)
+    for i in (0, 1, 2, 0, 3, 1):
+        assert cache.frame(i).index == i
+    assert Counting.reads == 5  # 0 again was kept; 1 had been pushed out by 3
+    assert len(cache) == 10

@@ -17,7 +17,7 @@ class Recorder:
         self.published: list[tuple[str, int, str]] = []
         self.done = threading.Semaphore(0)
 
-    def render(self, request: int) -> str:
+    def render(self, key: str, request: int) -> str:
         self.started.set()
         self.release.wait(5.0)
         self.rendered.append(request)
@@ -66,7 +66,7 @@ def test_a_failing_render_does_not_end_the_worker() -> None:
     rendered: list[int] = []
     done = threading.Semaphore(0)
 
-    def render(request: int) -> int:
+    def render(key: str, request: int) -> int:
         rendered.append(request)
         if request == 0:
             raise RuntimeError("bad frame")

@@ -1,0 +1,78 @@
+"""Each client's fusion engine on one drive, so that scrubbing and replaying follow the engine's
+own rules (`FusionEngine.seek`: the next frame is processed, any other is replayed from its
+window) and a redraw of the same frame and parameters (a layer toggled) costs nothing.
+
+Used by a drive's render worker alone, which is the drive's only reader; `forget` may come
+from another thread (a client leaving).
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+from collections.abc import Hashable
+from dataclasses import dataclass
+
+from core.camera import CameraModel
+from core.engine import FrameResult, Frames, FusionEngine
+from core.io.frame import FrameInput
+from core.params import Params
+
+CACHED_FRAMES = 64  # decoded frames kept per drive: a replay window and a scrub around it
+
+
+class FrameCache:
+    """The last CACHED_FRAMES frames read from `frames`, so that replays and redraws near the
+    playhead do not decode them again. One reader (the drive's render worker)."""
+
+    def __init__(self, frames: Frames, size: int = CACHED_FRAMES) -> None:
+        self._frames = frames
+        self._size = size
+        self._kept: OrderedDict[int, FrameInput] = OrderedDict()
+
+    def __len__(self) -> int:
+        return len(self._frames)
+
+    def frame(self, i: int) -> FrameInput:
+        if i in self._kept:
+            self._kept.move_to_end(i)
+            return self._kept[i]
+        frame = self._frames.frame(i)
+        self._kept[i] = frame
+        if len(self._kept) > self._size:
+            self._kept.popitem(last=False)
+        return frame
+
+
+@dataclass
+class _Entry:
+    engine: FusionEngine
+    last: FrameResult | None = None
+
+
+class ClientEngines:
+    """One `FusionEngine` per client key, for the parameters it asked for last."""
+
+    def __init__(self, camera: CameraModel) -> None:
+        self.camera = camera
+        self._entries: dict[Hashable, _Entry] = {}
+        self._lock = threading.Lock()
+
+    def result(self, key: Hashable, frames: Frames, params: Params, index: int) -> FrameResult:
+        """Frame `index` of `frames` under `params` for client `key`: the last result again
+        when nothing changed, else the engine's seek (a new engine when `params` changed).
+        Reader errors pass through."""
+        with self._lock:
+            entry = self._entries.get(key)
+            if entry is None or entry.engine.params != params:
+                entry = self._entries[key] = _Entry(FusionEngine(params, self.camera))
+        if entry.last is not None and entry.last.index == index:
+            return entry.last
+        entry.last = None  # a failed seek leaves no stale result behind
+        entry.last = entry.engine.seek(frames, index)
+        return entry.last
+
+    def forget(self, key: Hashable) -> None:
+        """Drop the engine of a client that left."""
+        with self._lock:
+            self._entries.pop(key, None)
