@@ -7,6 +7,7 @@ atomic update.
 
 from __future__ import annotations
 
+import functools
 import threading
 from collections.abc import Callable, Sequence
 from dataclasses import replace
@@ -21,6 +22,7 @@ from core.params import Params, ParamsError
 CAMERA_PANEL_WIDTH_PX = 680
 WAITING_TEXT = "rendering…"
 MARKDOWN_SPECIALS = "\\`*_{}[]<>()#+-.!|~"
+PLAYBACK_RATES = ("0.25x", "0.5x", "1x", "2x", "4x")  # of the drive's own frame rate
 LAYER_LABELS = {
     "radar": "radar targets",
     "areas": "search areas",
@@ -32,6 +34,10 @@ LAYER_LABELS = {
     "tracks": "track ids",
     "truth": "ground truth",
 }
+
+
+def _run_command(action: Callable[[], None], _: object) -> None:
+    action()
 
 
 def _escape_markdown(text: str) -> str:
@@ -79,6 +85,7 @@ class ClientSession:
         self._slider: viser.GuiSliderHandle[int] | None = None
         self._play: viser.GuiButtonHandle | None = None
         self._readout: viser.GuiMarkdownHandle | None = None
+        self._rate: viser.GuiDropdownHandle[str] | None = None
 
         with gui.add_folder("Layers", order=3):
             self._layer_boxes = {
@@ -88,6 +95,7 @@ class ClientSession:
         for box in self._layer_boxes.values():
             box.on_update(lambda _: self._set_layers())
         self._params_panel = ParamsPanel(gui, self.set_parameter, self.reset_parameters, order=4)
+        self._add_commands(gui)
 
         gui.main_panel.dock_left()
         self._camera_panel = gui.add_panel()
@@ -137,12 +145,24 @@ class ClientSession:
         ) + "".join(f"\n\n- {_escape_markdown(note)}" for note in notes)
         if frame_count == 0:
             return
+        duration_s = (frame_count - 1) / frame_rate_hz if frame_rate_hz > 0 else 0.0
         with gui.add_folder("Timeline", order=2) as self._timeline:
             self._slider = gui.add_slider("frame", 0, max(frame_count - 1, 0), 1, 0)
             self._play = gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY)
             step_back = gui.add_button("Step -1", icon=viser.Icon.CHEVRON_LEFT)
             step_on = gui.add_button("Step +1", icon=viser.Icon.CHEVRON_RIGHT)
+            self._rate = gui.add_dropdown("rate", PLAYBACK_RATES, initial_value="1x")
+            jump = gui.add_number(
+                "go to time s", 0.0, min=0.0, max=duration_s, step=0.1, hint="seconds from start"
+            )
             self._readout = gui.add_markdown(WAITING_TEXT)
+        jump.on_update(
+            lambda event: (
+                self.go_to(round(event.target.value * frame_rate_hz))
+                if event.client is not None
+                else None
+            )
+        )
         self._slider.on_update(lambda event: self.go_to(event.target.value))
         self._play.on_click(lambda _: self.set_playing(not self._state.playing))
         step_back.on_click(lambda _: self.step(-1))
@@ -244,12 +264,54 @@ class ClientSession:
 
     # --- internals ---------------------------------------------------------------------
     def _play_loop(self, stop: threading.Event, period_s: float) -> None:
-        """Advance the state one frame per period until paused or at the last frame."""
-        while not stop.wait(period_s):
+        """Advance the state one frame per period (at the chosen rate) until paused or at
+        the last frame."""
+        while not stop.wait(period_s / self._rate_factor()):
             if self._state.frame >= self._frame_count - 1:
                 self.set_playing(False)
                 return
             self.step(+1)
+
+    def _rate_factor(self) -> float:
+        rate = self._rate
+        return 1.0 if rate is None else float(rate.value.rstrip("x"))
+
+    def _add_commands(self, gui: viser.GuiApi) -> None:
+        """Keyboard commands (viser's command palette) and a panel that lists them."""
+        keys: list[tuple[str, str, Callable[[], None]]] = [
+            ("Play / pause", "space", self._toggle_playing),
+            ("Step back one frame", "arrowleft", functools.partial(self.step, -1)),
+            ("Step on one frame", "arrowright", functools.partial(self.step, +1)),
+            ("Go to the first frame", "home", functools.partial(self.go_to, 0)),
+            ("Go to the last frame", "end", self._go_to_end),
+        ]
+        keys += [
+            (
+                f"Toggle layer: {LAYER_LABELS[name]}",
+                str(k),
+                functools.partial(self._toggle_layer, name),
+            )
+            for k, name in enumerate(Layers.names(), start=1)
+        ]
+        lines = ["| key | does |", "| --- | --- |"]
+        for label, hotkey, action in keys:
+            command = gui.add_command(label, hotkey=hotkey)  # type: ignore[arg-type]
+            command.on_trigger(functools.partial(_run_command, action))
+            lines.append(f"| {hotkey} | {label} |")
+        with gui.add_folder("Keys", order=5, expand_by_default=False):
+            gui.add_markdown(
+                "\n".join(lines) + "\n\nThe command palette (Ctrl+K / Cmd+K) lists them too."
+            )
+
+    def _toggle_playing(self) -> None:
+        self.set_playing(not self._state.playing)
+
+    def _go_to_end(self) -> None:
+        self.go_to(self._frame_count - 1)
+
+    def _toggle_layer(self, name: str) -> None:
+        box = self._layer_boxes[name]
+        box.value = not box.value  # type: ignore[misc]  # its update callback sets the layers
 
     def _set_params(self, params: Params) -> None:
         with self._lock:

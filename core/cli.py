@@ -486,6 +486,9 @@ def _cmd_synth(args: argparse.Namespace) -> int:
     return 0
 
 
+LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
+
+
 def _cmd_serve(args: argparse.Namespace) -> int:
     from app.server import serve
 
@@ -497,6 +500,13 @@ def _cmd_serve(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
+    if args.host not in LOOPBACK_HOSTS:
+        print(
+            f"fusionscope serve: warning: --host {args.host} lets other machines reach the "
+            "inspector, and viser has no authentication: anyone who can reach this port can "
+            "see the recordings and change the parameters",
+            file=sys.stderr,
+        )
     try:
         serve(root, args.recording, args.host, args.port)
     except ValueError as err:

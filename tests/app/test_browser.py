@@ -180,3 +180,22 @@ def test_assumptions_and_reading_warnings_are_listed_under_the_name(
         page.get_by_text("skipped 3 lines that are not frames").wait_for(timeout=TIMEOUT_MS)
     finally:
         server.stop()
+
+
+def test_keys_step_the_frame_and_the_keys_panel_lists_them(
+    recordings: Recordings, page: Page
+) -> None:
+    server = start(recordings.root, recordings.name)
+    try:
+        page.goto(f"http://127.0.0.1:{server.port}/")
+        camera_src(page)
+        page.get_by_text("frame 0 /").wait_for(timeout=TIMEOUT_MS)
+        page.locator("body").click(position={"x": 700, "y": 700})  # focus off the controls
+        page.keyboard.press("ArrowRight")
+        page.get_by_text("frame 1 /").wait_for(timeout=TIMEOUT_MS)
+        page.keyboard.press("ArrowLeft")
+        page.get_by_text("frame 0 /").wait_for(timeout=TIMEOUT_MS)
+        page.get_by_text("Keys").click()
+        page.get_by_text("Toggle layer: radar targets").wait_for(timeout=TIMEOUT_MS)
+    finally:
+        server.stop()

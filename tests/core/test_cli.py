@@ -30,6 +30,18 @@ def test_serve_defaults_to_loopback_port_8080_and_the_bundled_highway() -> None:
     assert (Path(args.recordings) / "highway" / "recording.yaml").is_file()
 
 
+def test_serve_warns_that_another_host_has_no_authentication(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # a recording that is not there ends the command before anything binds
+    args = ["serve", "--recordings", str(tmp_path), "--recording", "nope", "--host", "0.0.0.0"]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "warning: --host 0.0.0.0" in err and "no authentication" in err
+    assert main(["serve", "--recordings", str(tmp_path), "--recording", "nope"]) == 2
+    assert "warning" not in capsys.readouterr().err
+
+
 def test_a_subcommand_is_required(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit):
         main([])
