@@ -56,12 +56,33 @@ def grey_to_rgb(image: GreyImage) -> RgbImage:
     return np.repeat(image[:, :, None], 3, axis=2)
 
 
-def _label(out: RgbImage, text: str, u_px: int, v_bottom_px: int, colour: Rgb) -> None:
-    """Text on a filled tag whose bottom-left corner is (u_px, v_bottom_px)."""
-    (w, h), baseline = cv2.getTextSize(text, FONT, FONT_SCALE, 1)
+def require_rgb_image(name: str, image: object) -> None:
+    """ValueError naming `name` unless `image` is an (H, W, 3) uint8 numpy array."""
+    if not isinstance(image, np.ndarray):
+        raise ValueError(
+            f"{name}: expected an (H, W, 3) uint8 RGB image, got {type(image).__name__}"
+        )
+    if image.dtype != np.uint8 or image.ndim != 3 or image.shape[2] != 3:
+        raise ValueError(
+            f"{name}: expected an (H, W, 3) uint8 RGB image, got {image.dtype} {image.shape}"
+        )
+
+
+def put_tag(
+    out: RgbImage,
+    text: str,
+    u_px: int,
+    v_bottom_px: int,
+    colour: Rgb,
+    text_colour: Rgb = (0, 0, 0),
+    font_scale: float = FONT_SCALE,
+) -> None:
+    """In place: `text_colour` text on a filled `colour` tag whose bottom-left corner is
+    (u_px, v_bottom_px), moved down to stay inside the image at the top."""
+    (w, h), baseline = cv2.getTextSize(text, FONT, font_scale, 1)
     top = max(v_bottom_px - h - baseline, 0)
     cv2.rectangle(out, (u_px, top), (u_px + w + 2, top + h + baseline), colour, cv2.FILLED)
-    cv2.putText(out, text, (u_px + 1, top + h), FONT, FONT_SCALE, (0, 0, 0), 1, cv2.LINE_AA)
+    cv2.putText(out, text, (u_px + 1, top + h), FONT, font_scale, text_colour, 1, cv2.LINE_AA)
 
 
 def draw_radar(rgb: RgbImage, targets: Sequence[RadarTarget], camera: CameraModel) -> RgbImage:
@@ -108,7 +129,7 @@ def draw_truth(rgb: RgbImage, truth: FrameTruth | None) -> RgbImage:
         colour = CLASS_COLOURS[obj.cls]
         u0, v0, u1, v1 = (round(c) for c in obj.box_px)
         cv2.rectangle(out, (u0, v0), (u1, v1), colour, LINE_THICKNESS_PX)
-        _label(out, f"{obj.cls} {obj.id}", u0, v0 - LINE_THICKNESS_PX, colour)
+        put_tag(out, f"{obj.cls} {obj.id}", u0, v0 - LINE_THICKNESS_PX, colour)
     return out
 
 

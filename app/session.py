@@ -29,6 +29,7 @@ LAYER_LABELS = {
     "vehicles": "vehicles",
     "guardrails": "guard rails",
     "pedestrians": "pedestrians",
+    "pruned": "pruned pedestrians",
     "strip": "pedestrian strip",
     "horizon": "horizon and pitch",
     "tracks": "track ids",
@@ -291,7 +292,7 @@ class ClientSession:
                 str(k),
                 functools.partial(self._toggle_layer, name),
             )
-            for k, name in enumerate(Layers.names(), start=1)
+            for k, name in zip("1234567890", Layers.names(), strict=False)
         ]
         lines = ["| key | does |", "| --- | --- |"]
         for label, hotkey, action in keys:

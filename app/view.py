@@ -16,8 +16,8 @@ from typing import Protocol
 import numpy as np
 import numpy.typing as npt
 
-from app import draw
-from app.state import ViewState
+from app import draw, overlays, panels
+from app.state import Layers, ViewState
 from core.camera import CameraModel
 from core.engine import FrameResult, StageTimings
 from core.io.frame import FrameInput
@@ -25,6 +25,18 @@ from core.io.groundtruth import FrameTruth
 
 MPS_TO_KMH = 3.6
 NS_PER_S = 1e9
+# the state's layers as app.overlays names them (ground truth is app.draw's)
+OVERLAY_OF_LAYER = {
+    "radar": "radar",
+    "areas": "search areas",
+    "vehicles": "vehicles",
+    "guardrails": "guard rails",
+    "pedestrians": "pedestrians",
+    "pruned": "pruned pedestrians",
+    "strip": "pedestrian strip",
+    "horizon": "pitch",
+    "tracks": "tracks",
+}
 
 
 class FrameSource(Protocol):
@@ -99,14 +111,28 @@ def render_view(
         raise ValueError(
             f"result, frame: expected frame {state.frame}, got {result.index} and {frame.index}"
         )
-    layers = state.layers
     rgb = draw.grey_to_rgb(frame.image)
-    if layers.horizon:
-        rgb = draw.draw_horizon(rgb, result.camera)
-    if layers.truth:
+    if state.layers.truth:
         rgb = draw.draw_truth(rgb, drive.truth(state.frame))
-    if layers.radar:
-        rgb = draw.draw_radar(rgb, frame.radar, result.camera)
+    rgb = overlays.draw_layers(rgb, result, overlay_names(state.layers))
     t_s = (frame.t_ns - int(drive.times_ns[0])) / NS_PER_S
     text = readout_text(state.frame, len(drive), t_s, frame.speed_mps, frame.yaw_rate_radps)
-    return FrameView(state.frame, draw.add_caption(rgb, text), text, result.timings)
+    return FrameView(
+        state.frame, draw.add_caption(rgb, text), text, result.timings, stage_panels(result, state)
+    )
+
+
+def overlay_names(layers: Layers) -> list[str]:
+    """The `app.overlays.LAYERS` names of the layers switched on."""
+    return [OVERLAY_OF_LAYER[name] for name in OVERLAY_OF_LAYER if getattr(layers, name)]
+
+
+def stage_panels(result: FrameResult, state: ViewState) -> tuple[tuple[str, draw.RgbImage], ...]:
+    """The stage images beside the camera: (tab title, RGB image)."""
+    threshold = state.params.pedestrian.symmetry_threshold
+    return (
+        ("Motion stereo", panels.motion_stereo_panel(result.motion_stereo)),
+        ("Symmetry", panels.symmetry_panel(result.vehicle.targets)),
+        ("Pedestrians", panels.pedestrian_symmetry_panel(result.pedestrian, threshold)),
+        ("Guard rails", panels.guard_rail_panel(result.guardrail.checks, result.areas)),
+    )

@@ -7,10 +7,16 @@ import numpy as np
 import pytest
 from app_fakes import HEIGHT_PX, FakeDrive
 
-from app import draw
+from app import draw, overlays
 from app.engines import ClientEngines, FrameCache
 from app.state import Layers, ViewState
-from app.view import FrameView, readout_text, render_view, timings_markdown
+from app.view import (
+    OVERLAY_OF_LAYER,
+    FrameView,
+    readout_text,
+    render_view,
+    timings_markdown,
+)
 from core.params import Params
 
 
@@ -46,6 +52,15 @@ def test_view_without_layers_shows_the_plain_frame() -> None:
     np.testing.assert_array_equal(view.image[:HEIGHT_PX], draw.grey_to_rgb(drive.frame(1).image))
     on = _view(drive, ViewState(frame=1))
     assert (on.image != view.image).any()
+
+
+def test_every_layer_but_truth_is_an_overlay_and_every_stage_has_a_panel() -> None:
+    assert set(OVERLAY_OF_LAYER) == set(Layers.names()) - {"truth"}
+    assert set(OVERLAY_OF_LAYER.values()) == set(overlays.LAYERS)
+    view = _view(FakeDrive(frames=3), ViewState(frame=2))
+    titles = [title for title, _ in view.panels]
+    assert titles == ["Motion stereo", "Symmetry", "Pedestrians", "Guard rails"]
+    assert all(image.dtype == np.uint8 and image.shape[2] == 3 for _, image in view.panels)
 
 
 def test_a_result_of_another_frame_is_refused() -> None:

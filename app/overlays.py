@@ -1,0 +1,445 @@
+"""Overlays of one engine frame on the camera picture: one pure function per layer.
+
+Each function takes an RGB picture of the full camera frame and parts of a
+`core.engine.FrameResult`, and returns a new picture with one layer drawn, so the inspector
+can toggle layers by choosing which functions it chains. `LAYERS` names them all with one
+signature, (rgb, result) -> rgb.
+
+Colours follow the papers where they say: paper 000 fig. 5 (vehicles: orange box, yellow
+cross for the radar target that refined it, blue crosses for discarded ones), fig. 6-7
+(pedestrians: bright green kept, dark green rejected, a grey search strip) and fig. 2
+(pitch: blue line hints, red intersections, green cross for the calibrated vanishing point,
+red cross for the detected one). Guard rails found by the engine are magenta, apart from
+the ground truth's orange rails (`app.draw.GUARD_RAIL_COLOUR`).
+
+Images: RGB (H, W, 3) uint8 indexed [row, col]; pixels (u, v) = (column, row) as in
+`core.camera`.
+
+Boxes: vehicle boxes are pixel-edge bounds (pixel centres at whole numbers, `core.vehicle`);
+search areas and pedestrian boxes end exclusive on pixel centres (`core.search_area`,
+`core.pedestrian`), i.e. their pixel edges are half a pixel lower. A box outline is drawn
+on the pixels holding its edges (`box_pixels`), `BOX_THICKNESS_PX` deep inwards, so it never
+covers a pixel outside the box.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Collection, Mapping, Sequence
+
+import cv2
+import numpy as np
+
+from app.draw import (
+    FONT,
+    HORIZON_COLOUR,
+    LINE_THICKNESS_PX,
+    RADAR_CROSS_SIZE_PX,
+    TEXT_COLOUR,
+    Rgb,
+    RgbImage,
+    put_tag,
+    require_rgb_image,
+)
+from core.camera import CameraModel
+from core.engine import FrameResult
+from core.guardrail import GuardRailCheck
+from core.pedestrian import CONSTRAINT_VERDICTS, PedestrianCandidate
+from core.pitch import Lines, PitchResult
+from core.search_area import SearchArea
+from core.tracking import Track
+from core.vehicle import TargetResult, Vehicle
+
+Box = tuple[float, float, float, float]
+
+# paper 000 fig. 5
+RADAR_REFINED_COLOUR: Rgb = (255, 220, 0)  # yellow: the target refined a vehicle
+RADAR_DISCARDED_COLOUR: Rgb = (40, 90, 255)  # blue: searched, no vehicle
+RADAR_GUARD_RAIL_COLOUR: Rgb = (255, 0, 255)  # magenta: labelled guard rail
+VEHICLE_COLOUR: Rgb = (255, 120, 0)  # orange: a final vehicle
+VEHICLE_REJECTED_COLOUR: Rgb = (150, 90, 60)  # brown: a box the size filter dropped
+SEARCH_AREA_COLOUR: Rgb = (225, 225, 225)  # near white
+# paper 002, engine's findings
+GUARD_RAIL_LINE_COLOUR: Rgb = (255, 0, 255)  # magenta: a followed line long enough
+SHORT_LINE_COLOUR: Rgb = (140, 0, 140)  # dark magenta: a followed line too short
+OVERLAP_COLOUR: Rgb = (255, 0, 255)  # hatching of areas labelled guard rail by overlap
+# paper 000 fig. 6-7
+PEDESTRIAN_COLOUR: Rgb = (0, 255, 0)  # bright green: kept
+PEDESTRIAN_REJECTED_COLOUR: Rgb = (0, 120, 0)  # dark green: rejected
+STRIP_GREY: Rgb = (128, 128, 128)
+# paper 000 fig. 2
+LINE_HINT_COLOUR: Rgb = (60, 120, 255)  # blue
+INTERSECTION_COLOUR: Rgb = (255, 40, 40)  # red circles
+CALIBRATED_VP_COLOUR: Rgb = (0, 220, 0)  # green cross
+VANISHING_POINT_COLOUR: Rgb = (255, 40, 40)  # red cross
+TRACK_COLOUR: Rgb = TEXT_COLOUR
+
+BOX_THICKNESS_PX = 2
+STRIP_ALPHA = 0.25  # share of the grey in the translucent pedestrian strip
+HATCH_STEP_PX = 8  # distance between hatching lines along a row
+TAG_FONT_SCALE = 0.4
+INTERSECTION_RADIUS_PX = 3
+VP_CROSS_SIZE_PX = 18
+TRACK_TAG_GAP_PX = 2
+
+# The pedestrian candidates that reached the fusion filters (paper 000 fig. 6-7); the others
+# were pruned by the size and perspective constraints (`core.pedestrian.CONSTRAINT_VERDICTS`).
+FUSION_VERDICTS = ("pedestrian", "motion_stereo", "vehicle")
+# Short words for the verdicts of pedestrian candidates (`core.pedestrian.Verdict`).
+PEDESTRIAN_REASONS: Mapping[str, str] = {
+    "pedestrian": "",
+    "no_top": "no top",
+    "perspective": "persp",
+    "size": "size",
+    "aspect": "aspect",
+    "motion_stereo": "motion",
+    "vehicle": "vehicle",
+}
+
+
+def radar_colour(verdict: str) -> Rgb:
+    """The cross colour of a radar target with `core.vehicle.Verdict` `verdict`."""
+    if verdict == "vehicle":
+        return RADAR_REFINED_COLOUR
+    if verdict == "guard_rail":
+        return RADAR_GUARD_RAIL_COLOUR
+    return RADAR_DISCARDED_COLOUR
+
+
+def box_pixels(box_edges_px: Box) -> tuple[int, int, int, int]:
+    """(col0, row0, col1, row1) inclusive: the pixels holding the edges of a pixel-edge box
+    (u0, v0, u1, v1), a pixel being inside up to half of it."""
+    u0, v0, u1, v1 = box_edges_px
+    c0, r0 = math.floor(u0 + 0.5), math.floor(v0 + 0.5)
+    c1, r1 = math.ceil(u1 - 0.5), math.ceil(v1 - 0.5)
+    return c0, r0, max(c0, c1), max(r0, r1)
+
+
+def exclusive_to_edges(box_px: Box) -> Box:
+    """A box ending exclusive on pixel centres (search areas, pedestrians) as pixel edges."""
+    u0, v0, u1, v1 = box_px
+    return u0 - 0.5, v0 - 0.5, u1 - 0.5, v1 - 0.5
+
+
+def _outline(out: RgbImage, box_edges_px: Box, colour: Rgb, thickness_px: int) -> None:
+    """In place: `thickness_px` nested one-pixel rectangles from the box's edge pixels in."""
+    c0, r0, c1, r1 = box_pixels(box_edges_px)
+    for k in range(thickness_px):
+        if c0 + k > c1 - k or r0 + k > r1 - k:
+            break
+        cv2.rectangle(out, (c0 + k, r0 + k), (c1 - k, r1 - k), colour, 1)
+
+
+def _start(rgb: RgbImage) -> RgbImage:
+    require_rgb_image("rgb", rgb)
+    return rgb.copy()
+
+
+def _tag(
+    out: RgbImage,
+    text: str,
+    u_px: float,
+    v_bottom_px: float,
+    colour: Rgb,
+    text_colour: Rgb = (0, 0, 0),
+) -> None:
+    """In place: `app.draw.put_tag` moved left to stay inside the image on the right."""
+    (w, _), _ = cv2.getTextSize(text, FONT, TAG_FONT_SCALE, 1)
+    u = min(round(u_px), out.shape[1] - w - 3)
+    put_tag(out, text, max(u, 0), round(v_bottom_px), colour, text_colour, TAG_FONT_SCALE)
+
+
+# --- radar and vehicles (paper 000 fig. 5, paper 001) ----------------------------------------
+
+
+def draw_radar_targets(
+    rgb: RgbImage, targets: Sequence[TargetResult], camera: CameraModel
+) -> RgbImage:
+    """A cross where each radar target's road point (x_m, y_m, 0) projects with `camera` (the
+    frame's, its pitch included), coloured by `radar_colour` of its verdict, labelled with its
+    distance ahead x_m (the vehicles' `distance_m`; `app.draw.draw_radar` shows the range).
+
+    targets: `VehicleResult.targets`. Targets behind the camera are skipped; crosses off the
+    image are clipped.
+    """
+    out = _start(rgb)
+    if not targets:
+        return out
+    pts_vehicle_m = np.array([[t.target.x_m, t.target.y_m, 0.0] for t in targets])
+    uv_px, in_front = camera.project(pts_vehicle_m)
+    for t, (u, v), front in zip(targets, uv_px, in_front, strict=True):
+        if not front:
+            continue
+        colour = radar_colour(t.verdict)
+        centre = (round(u), round(v))
+        cv2.drawMarker(
+            out, centre, colour, cv2.MARKER_CROSS, RADAR_CROSS_SIZE_PX, LINE_THICKNESS_PX
+        )
+        text_at = (centre[0] + RADAR_CROSS_SIZE_PX // 2 + 2, centre[1] + RADAR_CROSS_SIZE_PX // 2)
+        cv2.putText(
+            out, f"{t.target.x_m:.0f}m", text_at, FONT, TAG_FONT_SCALE, colour, 1, cv2.LINE_AA
+        )
+    return out
+
+
+def draw_search_areas(rgb: RgbImage, areas: Sequence[SearchArea]) -> RgbImage:
+    """The cropped search area of each radar target (`SearchArea.box_px`), one pixel thick."""
+    out = _start(rgb)
+    for area in areas:
+        c0, r0, c1, r1 = area.box_px
+        _outline(out, exclusive_to_edges((c0, r0, c1, r1)), SEARCH_AREA_COLOUR, 1)
+    return out
+
+
+def draw_vehicle_boxes(
+    rgb: RgbImage, vehicles: Sequence[Vehicle], targets: Sequence[TargetResult] = ()
+) -> RgbImage:
+    """The final vehicles' boxes in `VEHICLE_COLOUR`, and the boxes the size filter dropped
+    (targets with verdict "size_filter") in `VEHICLE_REJECTED_COLOUR` tagged "size".
+
+    vehicles: `VehicleResult.vehicles`; targets: `VehicleResult.targets`.
+    """
+    out = _start(rgb)
+    for t in targets:
+        box = t.box_px
+        if t.verdict == "size_filter" and box is not None:
+            _outline(out, box, VEHICLE_REJECTED_COLOUR, BOX_THICKNESS_PX)
+            c0, r0, _, _ = box_pixels(box)
+            _tag(out, "size", c0, r0 - 1, VEHICLE_REJECTED_COLOUR)
+    for v in vehicles:
+        _outline(out, v.box_px, VEHICLE_COLOUR, BOX_THICKNESS_PX)
+    return out
+
+
+# --- guard rails (paper 002) ----------------------------------------------------------------
+
+
+def line_image_px(check: GuardRailCheck, area: SearchArea) -> np.ndarray:
+    """(N, 2) float64 (u, v) image pixels of the centres of a check's followed line pixels
+    (patch (row, col), `GuardRailCheck.line_px`) in its search area."""
+    rows = check.line_px[:, 0].astype(np.float64) + 0.5
+    cols = check.line_px[:, 1].astype(np.float64) + 0.5
+    u, v = area.to_image_px(cols, rows)
+    return np.stack([u, v], axis=1)
+
+
+def _hatch(out: RgbImage, box: tuple[int, int, int, int], colour: Rgb) -> None:
+    """In place: diagonal lines every HATCH_STEP_PX across the pixels [r0:r1, c0:c1]."""
+    c0, r0, c1, r1 = box
+    sub = out[r0:r1, c0:c1].copy()
+    h, w = sub.shape[:2]
+    for k in range(-h, w, HATCH_STEP_PX):
+        cv2.line(sub, (k, h - 1), (k + h - 1, 0), colour, 1)
+    out[r0:r1, c0:c1] = sub
+
+
+def draw_guard_rails(
+    rgb: RgbImage, checks: Sequence[GuardRailCheck], areas: Sequence[SearchArea]
+) -> RgbImage:
+    """The lines the guard-rail filter followed, in image pixels: `GUARD_RAIL_LINE_COLOUR`
+    (2 px) where they made a guard rail, `SHORT_LINE_COLOUR` (1 px) where too short; the
+    areas labelled guard rail by overlap management, hatched in `OVERLAP_COLOUR`.
+
+    checks: `GuardRailResult.checks`; areas: the frame's search areas (matched by
+    target_index; a check without its area is skipped).
+    """
+    out = _start(rgb)
+    by_target = {a.target_index: a for a in areas}
+    for check in checks:
+        area = by_target.get(check.target_index)
+        if area is None:
+            continue
+        if check.verdict == "overlap":
+            _hatch(out, area.box_px, OVERLAP_COLOUR)
+            continue
+        if len(check.line_px) == 0:
+            continue
+        pts = np.round(line_image_px(check, area)).astype(np.int32).reshape(-1, 1, 2)
+        rail = check.verdict == "guard_rail"
+        colour = GUARD_RAIL_LINE_COLOUR if rail else SHORT_LINE_COLOUR
+        cv2.polylines(out, [pts], False, colour, LINE_THICKNESS_PX if rail else 1)
+    return out
+
+
+# --- pedestrians (paper 000 II-D, fig. 6-7) -----------------------------------------------
+
+
+def draw_pedestrian_strip(rgb: RgbImage, strip_rows_px: tuple[int, int]) -> RgbImage:
+    """The search strip: rows first .. stop - 1 blended with `STRIP_GREY` (`STRIP_ALPHA`)."""
+    out = _start(rgb)
+    first, stop = max(strip_rows_px[0], 0), min(strip_rows_px[1], out.shape[0])
+    if stop > first:
+        band = out[first:stop].astype(np.float32)
+        grey = np.array(STRIP_GREY, dtype=np.float32)
+        out[first:stop] = np.round((1 - STRIP_ALPHA) * band + STRIP_ALPHA * grey).astype(np.uint8)
+    return out
+
+
+def draw_pedestrians(
+    rgb: RgbImage,
+    candidates: Sequence[PedestrianCandidate],
+    verdicts: Collection[str] | None = None,
+) -> RgbImage:
+    """Each candidate's extended box: kept ones in `PEDESTRIAN_COLOUR`, rejected ones in
+    `PEDESTRIAN_REJECTED_COLOUR` (1 px) with their `PEDESTRIAN_REASONS` word on a tag
+    above.
+
+    candidates: `PedestrianResult.candidates`; verdicts: draw only the candidates with
+    these verdicts (all when None). Kept boxes are drawn last, on top.
+    """
+    out = _start(rgb)
+    shown = [c for c in candidates if verdicts is None or c.verdict in verdicts]
+    ordered = sorted(shown, key=lambda c: c.verdict == "pedestrian")
+    for c in ordered:
+        box = exclusive_to_edges(c.extended_box_px)
+        if c.verdict == "pedestrian":
+            _outline(out, box, PEDESTRIAN_COLOUR, BOX_THICKNESS_PX)
+            continue
+        _outline(out, box, PEDESTRIAN_REJECTED_COLOUR, 1)
+        c0, r0, _, _ = box_pixels(box)
+        reason = PEDESTRIAN_REASONS.get(c.verdict, c.verdict)
+        _tag(out, reason, c0, r0 - 1, PEDESTRIAN_REJECTED_COLOUR, TEXT_COLOUR)
+    return out
+
+
+# --- pitch (paper 000 II-A, fig. 2) ---------------------------------------------------------
+
+
+def line_segments_px(lines: Lines, top_row_px: float | None = None) -> np.ndarray:
+    """(N, 4) float64 (u0, v0, u1, v1) segments of image lines a u + b v + c = 0 over the
+    rows of their pixels (`Lines.rows_px`), the top extended up to `top_row_px` when given.
+    Lines within 1e-6 of horizontal are left out (NaN rows) as no row range fixes them."""
+    a, b, c = lines.abc[:, 0], lines.abc[:, 1], lines.abc[:, 2]
+    v_top = lines.rows_px[:, 0].copy()
+    if top_row_px is not None:
+        v_top = np.minimum(v_top, top_row_px)
+    v_bottom = lines.rows_px[:, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        steep = np.abs(a) > 1e-6
+        u_top = np.where(steep, -(b * v_top + c) / a, np.nan)
+        u_bottom = np.where(steep, -(b * v_bottom + c) / a, np.nan)
+    return np.stack([u_top, v_top, u_bottom, v_bottom], axis=1)
+
+
+def draw_pitch(rgb: RgbImage, pitch: PitchResult, camera: CameraModel) -> RgbImage:
+    """The pitch detector's work (paper 000 fig. 2): the chosen lines in `LINE_HINT_COLOUR`
+    up to the vanishing point's row, their used intersections as red circles, the
+    calibrated vanishing point (green cross), the detected one (red cross), and the horizon
+    of `camera` (the frame's, with the detected pitch) in `app.draw.HORIZON_COLOUR`.
+    """
+    out = _start(rgb)
+    right_px = out.shape[1] - 1
+    v_left, v_right = camera.horizon_row_px(0.0), camera.horizon_row_px(float(right_px))
+    cv2.line(out, (0, round(v_left)), (right_px, round(v_right)), HORIZON_COLOUR, 1)
+    vp = pitch.vanishing_point_px
+    top = float(vp[1]) if vp is not None else pitch.horizon_row_px
+    for u0, v0, u1, v1 in line_segments_px(pitch.chosen, top):
+        if np.all(np.isfinite([u0, u1])):
+            cv2.line(out, (round(u0), round(v0)), (round(u1), round(v1)), LINE_HINT_COLOUR, 1)
+    used = pitch.intersections_px[pitch.intersection_used]
+    for u, v in used:
+        if np.isfinite(u) and np.isfinite(v) and abs(u) < 1e5 and abs(v) < 1e5:
+            cv2.circle(out, (round(u), round(v)), INTERSECTION_RADIUS_PX, INTERSECTION_COLOUR, 1)
+    cu, cv_ = pitch.calibrated_vp_px
+    cv2.drawMarker(
+        out, (round(cu), round(cv_)), CALIBRATED_VP_COLOUR, cv2.MARKER_CROSS, VP_CROSS_SIZE_PX, 1
+    )
+    if vp is not None:
+        cv2.drawMarker(
+            out,
+            (round(vp[0]), round(vp[1])),
+            VANISHING_POINT_COLOUR,
+            cv2.MARKER_CROSS,
+            VP_CROSS_SIZE_PX,
+            LINE_THICKNESS_PX,
+        )
+    return out
+
+
+# --- tracks (core.tracking) -----------------------------------------------------------------
+
+
+def draw_track_ids(rgb: RgbImage, tracks: Sequence[Track]) -> RgbImage:
+    """A "#id" tag under the bottom-left corner of each track's last box, in the colour of
+    its kind (vehicles `VEHICLE_COLOUR`, pedestrians `PEDESTRIAN_COLOUR`); a track missed
+    this frame reads "#id ?" (its box is an older frame's). Guard-rail tracks are skipped.
+
+    tracks: e.g. `FrameResult.tracked_vehicles + FrameResult.tracked_pedestrians`.
+    """
+    out = _start(rgb)
+    (_, text_h), baseline = cv2.getTextSize("#0", FONT, TAG_FONT_SCALE, 1)
+    for t in tracks:
+        if t.kind == "guard_rail":
+            continue
+        colour = VEHICLE_COLOUR if t.kind == "vehicle" else PEDESTRIAN_COLOUR
+        u0, _, _, v1 = t.box_px
+        text = f"#{t.id}" if t.misses == 0 else f"#{t.id} ?"
+        _tag(out, text, u0, v1 + TRACK_TAG_GAP_PX + text_h + baseline, colour)
+    return out
+
+
+# --- all layers of a FrameResult ------------------------------------------------------------
+
+Layer = Callable[[RgbImage, FrameResult], RgbImage]
+
+
+def _radar_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
+    return draw_radar_targets(rgb, r.vehicle.targets, r.camera)
+
+
+def _areas_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
+    return draw_search_areas(rgb, r.areas)
+
+
+def _vehicles_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
+    return draw_vehicle_boxes(rgb, r.vehicle.vehicles, r.vehicle.targets)
+
+
+def _rails_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
+    return draw_guard_rails(rgb, r.guardrail.checks, r.areas)
+
+
+def _strip_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
+    return draw_pedestrian_strip(rgb, r.pedestrian.strip_rows_px)
+
+
+def _pedestrians_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
+    return draw_pedestrians(rgb, r.pedestrian.candidates, FUSION_VERDICTS)
+
+
+def _pruned_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
+    return draw_pedestrians(rgb, r.pedestrian.candidates, CONSTRAINT_VERDICTS)
+
+
+def _pitch_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
+    return draw_pitch(rgb, r.pitch, r.camera)
+
+
+def _tracks_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
+    return draw_track_ids(rgb, r.tracked_vehicles + r.tracked_pedestrians)
+
+
+# In drawing order, back to front: the strip first, text last.
+LAYERS: Mapping[str, Layer] = {
+    "pedestrian strip": _strip_layer,
+    "search areas": _areas_layer,
+    "pitch": _pitch_layer,
+    "guard rails": _rails_layer,
+    "pruned pedestrians": _pruned_layer,
+    "pedestrians": _pedestrians_layer,
+    "vehicles": _vehicles_layer,
+    "radar": _radar_layer,
+    "tracks": _tracks_layer,
+}
+
+
+def draw_layers(rgb: RgbImage, result: FrameResult, names: Sequence[str]) -> RgbImage:
+    """The layers `names` (keys of `LAYERS`) of `result` on `rgb`, in `LAYERS` order."""
+    unknown = [n for n in names if n not in LAYERS]
+    if unknown:
+        raise ValueError(f"names: expected layers among {', '.join(LAYERS)}, got {unknown}")
+    out = _start(rgb)
+    for name, layer in LAYERS.items():
+        if name in names:
+            out = layer(out, result)
+    return out
