@@ -16,25 +16,15 @@ import viser
 
 from app.params_panel import ParamsPanel
 from app.state import Layers, ViewState
-from app.view import FrameView, timings_markdown
+from app.view import OVERLAY_OF_LAYER, FrameView, timings_markdown
 from core.params import Params, ParamsError
 
 CAMERA_PANEL_WIDTH_PX = 680
 WAITING_TEXT = "rendering…"
 MARKDOWN_SPECIALS = "\\`*_{}[]<>()#+-.!|~"
 PLAYBACK_RATES = ("0.25x", "0.5x", "1x", "2x", "4x")  # of the drive's own frame rate
-LAYER_LABELS = {
-    "radar": "radar targets",
-    "areas": "search areas",
-    "vehicles": "vehicles",
-    "guardrails": "guard rails",
-    "pedestrians": "pedestrians",
-    "pruned": "pruned pedestrians",
-    "strip": "pedestrian strip",
-    "horizon": "horizon and pitch",
-    "tracks": "track ids",
-    "truth": "ground truth",
-}
+# the layers' checkbox labels: the overlays' own names
+LAYER_LABELS = {**OVERLAY_OF_LAYER, "truth": "ground truth"}
 
 
 def _run_command(action: Callable[[], None], _: object) -> None:

@@ -196,6 +196,6 @@ def test_keys_step_the_frame_and_the_keys_panel_lists_them(
         page.keyboard.press("ArrowLeft")
         page.get_by_text("frame 0 /").wait_for(timeout=TIMEOUT_MS)
         page.get_by_text("Keys").click()
-        page.get_by_text("Toggle layer: radar targets").wait_for(timeout=TIMEOUT_MS)
+        page.get_by_text("Toggle layer: search areas").wait_for(timeout=TIMEOUT_MS)
     finally:
         server.stop()
