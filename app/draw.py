@@ -85,34 +85,50 @@ def put_tag(
     cv2.putText(out, text, (u_px + 1, top + h), FONT, font_scale, text_colour, 1, cv2.LINE_AA)
 
 
+def draw_road_crosses(
+    rgb: RgbImage,
+    road_points_m: Sequence[tuple[float, float]],
+    camera: CameraModel,
+    colours: Sequence[Rgb],
+    labels: Sequence[str],
+    label_offset_px: tuple[int, int],
+    font_scale: float,
+) -> RgbImage:
+    """A cross (`RADAR_CROSS_SIZE_PX`) where each road point (x_m, y_m, 0) projects, in its
+    colour, with its label `label_offset_px` (right, down) from the centre. Points behind the
+    camera are skipped; crosses outside the image are clipped by OpenCV."""
+    out = rgb.copy()
+    if not road_points_m:
+        return out
+    pts_vehicle_m = np.array([[x, y, 0.0] for x, y in road_points_m])
+    uv_px, in_front = camera.project(pts_vehicle_m)
+    du, dv = label_offset_px
+    for (u, v), front, colour, label in zip(uv_px, in_front, colours, labels, strict=True):
+        if not front:
+            continue
+        centre = (round(u), round(v))
+        cv2.drawMarker(
+            out, centre, colour, cv2.MARKER_CROSS, RADAR_CROSS_SIZE_PX, LINE_THICKNESS_PX
+        )
+        at = (centre[0] + du, centre[1] + dv)
+        cv2.putText(out, label, at, FONT, font_scale, colour, 1, cv2.LINE_AA)
+    return out
+
+
 def draw_radar(rgb: RgbImage, targets: Sequence[RadarTarget], camera: CameraModel) -> RgbImage:
     """Crosses where the radar targets' road points (x_m, y_m, 0) project, labelled with range.
 
     Targets behind the camera are skipped; crosses outside the image are clipped by OpenCV.
     """
-    out = rgb.copy()
-    if not targets:
-        return out
-    pts_vehicle_m = np.array([[t.x_m, t.y_m, 0.0] for t in targets])
-    uv_px, in_front = camera.project(pts_vehicle_m)
-    for target, (u, v), front in zip(targets, uv_px, in_front, strict=True):
-        if not front:
-            continue
-        centre = (round(u), round(v))
-        cv2.drawMarker(
-            out, centre, RADAR_COLOUR, cv2.MARKER_CROSS, RADAR_CROSS_SIZE_PX, LINE_THICKNESS_PX
-        )
-        cv2.putText(
-            out,
-            f"{target.range_m:.0f}m",
-            (centre[0] + RADAR_CROSS_SIZE_PX // 2 + 2, centre[1] - 2),
-            FONT,
-            FONT_SCALE,
-            RADAR_COLOUR,
-            1,
-            cv2.LINE_AA,
-        )
-    return out
+    return draw_road_crosses(
+        rgb,
+        [(t.x_m, t.y_m) for t in targets],
+        camera,
+        [RADAR_COLOUR] * len(targets),
+        [f"{t.range_m:.0f}m" for t in targets],
+        (RADAR_CROSS_SIZE_PX // 2 + 2, -2),
+        FONT_SCALE,
+    )
 
 
 def draw_truth(rgb: RgbImage, truth: FrameTruth | None) -> RgbImage:

@@ -32,19 +32,20 @@ import numpy as np
 
 from app.draw import (
     FONT,
-    HORIZON_COLOUR,
     LINE_THICKNESS_PX,
     RADAR_CROSS_SIZE_PX,
     TEXT_COLOUR,
     Rgb,
     RgbImage,
+    draw_horizon,
+    draw_road_crosses,
     put_tag,
     require_rgb_image,
 )
 from core.camera import CameraModel
 from core.engine import FrameResult
 from core.guardrail import GuardRailCheck
-from core.pedestrian import CONSTRAINT_VERDICTS, PedestrianCandidate
+from core.pedestrian import CONSTRAINT_VERDICTS, FUSION_VERDICTS, PedestrianCandidate
 from core.pitch import Lines, PitchResult
 from core.search_area import SearchArea
 from core.tracking import Track
@@ -72,7 +73,6 @@ LINE_HINT_COLOUR: Rgb = (60, 120, 255)  # blue
 INTERSECTION_COLOUR: Rgb = (255, 40, 40)  # red circles
 CALIBRATED_VP_COLOUR: Rgb = (0, 220, 0)  # green cross
 VANISHING_POINT_COLOUR: Rgb = (255, 40, 40)  # red cross
-TRACK_COLOUR: Rgb = TEXT_COLOUR
 
 BOX_THICKNESS_PX = 2
 STRIP_ALPHA = 0.25  # share of the grey in the translucent pedestrian strip
@@ -82,9 +82,6 @@ INTERSECTION_RADIUS_PX = 3
 VP_CROSS_SIZE_PX = 18
 TRACK_TAG_GAP_PX = 2
 
-# The pedestrian candidates that reached the fusion filters (paper 000 fig. 6-7); the others
-# were pruned by the size and perspective constraints (`core.pedestrian.CONSTRAINT_VERDICTS`).
-FUSION_VERDICTS = ("pedestrian", "motion_stereo", "vehicle")
 # Short words for the verdicts of pedestrian candidates (`core.pedestrian.Verdict`).
 PEDESTRIAN_REASONS: Mapping[str, str] = {
     "pedestrian": "",
@@ -162,24 +159,17 @@ def draw_radar_targets(
     targets: `VehicleResult.targets`. Targets behind the camera are skipped; crosses off the
     image are clipped.
     """
-    out = _start(rgb)
-    if not targets:
-        return out
-    pts_vehicle_m = np.array([[t.target.x_m, t.target.y_m, 0.0] for t in targets])
-    uv_px, in_front = camera.project(pts_vehicle_m)
-    for t, (u, v), front in zip(targets, uv_px, in_front, strict=True):
-        if not front:
-            continue
-        colour = radar_colour(t.verdict)
-        centre = (round(u), round(v))
-        cv2.drawMarker(
-            out, centre, colour, cv2.MARKER_CROSS, RADAR_CROSS_SIZE_PX, LINE_THICKNESS_PX
-        )
-        text_at = (centre[0] + RADAR_CROSS_SIZE_PX // 2 + 2, centre[1] + RADAR_CROSS_SIZE_PX // 2)
-        cv2.putText(
-            out, f"{t.target.x_m:.0f}m", text_at, FONT, TAG_FONT_SCALE, colour, 1, cv2.LINE_AA
-        )
-    return out
+    require_rgb_image("rgb", rgb)
+    half = RADAR_CROSS_SIZE_PX // 2
+    return draw_road_crosses(
+        rgb,
+        [(t.target.x_m, t.target.y_m) for t in targets],
+        camera,
+        [radar_colour(t.verdict) for t in targets],
+        [f"{t.target.x_m:.0f}m" for t in targets],
+        (half + 2, half),
+        TAG_FONT_SCALE,
+    )
 
 
 def draw_search_areas(rgb: RgbImage, areas: Sequence[SearchArea]) -> RgbImage:
@@ -327,10 +317,8 @@ def draw_pitch(rgb: RgbImage, pitch: PitchResult, camera: CameraModel) -> RgbIma
     calibrated vanishing point (green cross), the detected one (red cross), and the horizon
     of `camera` (the frame's, with the detected pitch) in `app.draw.HORIZON_COLOUR`.
     """
-    out = _start(rgb)
-    right_px = out.shape[1] - 1
-    v_left, v_right = camera.horizon_row_px(0.0), camera.horizon_row_px(float(right_px))
-    cv2.line(out, (0, round(v_left)), (right_px, round(v_right)), HORIZON_COLOUR, 1)
+    require_rgb_image("rgb", rgb)
+    out = draw_horizon(rgb, camera)
     vp = pitch.vanishing_point_px
     top = float(vp[1]) if vp is not None else pitch.horizon_row_px
     for u0, v0, u1, v1 in line_segments_px(pitch.chosen, top):

@@ -96,6 +96,8 @@ Verdict = Literal[
     "pedestrian", "no_top", "perspective", "size", "aspect", "motion_stereo", "vehicle"
 ]
 CONSTRAINT_VERDICTS: tuple[Verdict, ...] = ("no_top", "perspective", "size", "aspect")
+# the candidates that passed those constraints and reached the fusion filters (fig. 6-7)
+FUSION_VERDICTS: tuple[Verdict, ...] = ("pedestrian", "motion_stereo", "vehicle")
 
 # Step 4 starts at the hip of a scan_height_m person, which is still the chest of a child
 # of min_height_m (hips lie at about 0.5 of a person's height, shoulders at 0.8).

@@ -21,7 +21,7 @@ from core.io.drive import Drive
 from core.io.frame import FrameInput
 from core.io.groundtruth import FrameTruth
 from core.params import Params
-from core.pedestrian import Verdict
+from core.pedestrian import FUSION_VERDICTS, Verdict
 from core.tracking import Track
 
 from . import objects, vehicles
@@ -34,7 +34,7 @@ from .vehicles import Estimate, EventStats, FrameStats, FrameVehicles
 # the pedestrian outputs compared: the detector alone (its candidates that passed the size
 # and perspective constraints), after the motion-stereo filter, after the vehicle filter
 PEDESTRIAN_STAGES: dict[str, tuple[Verdict, ...]] = {
-    "symmetry": ("pedestrian", "motion_stereo", "vehicle"),
+    "symmetry": FUSION_VERDICTS,
     "motion_stereo": ("pedestrian", "vehicle"),
     "vehicles": ("pedestrian",),
 }
