@@ -11,6 +11,7 @@ import dataclasses
 import math
 import types
 import typing
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
@@ -444,20 +445,44 @@ class Params:
 
     def with_value(self, dotted: str, value: object) -> Params:
         """A copy with one leaf replaced, e.g. `with_value("pitch.merge_angle_rad", 0.03)`."""
+        return self.with_values({dotted: value})
+
+    def with_values(self, values: Mapping[str, object]) -> Params:
+        """A copy with several leaves replaced at once, so that values checked against each
+        other (min_distance_m < max_distance_m) may change together. ParamsError names an
+        unknown leaf or a value refused."""
         data = to_dict(self)
-        node: dict[str, Any] = data
-        parts = dotted.split(".")
-        for part in parts[:-1]:
-            if not isinstance(node.get(part), dict):
-                groups = ", ".join(k for k, v in node.items() if isinstance(v, dict))
-                raise ParamsError(
-                    f"{dotted}: no such parameter group {part!r}; known here: {groups}"
-                )
-            node = node[part]
-        if parts[-1] not in node or isinstance(node[parts[-1]], dict):
-            raise ParamsError(f"{dotted}: no such parameter; known here: {', '.join(node)}")
-        node[parts[-1]] = value
+        for dotted, value in values.items():
+            node, leaf = _leaf_of(data, dotted)
+            node[leaf] = value
         return from_dict(data)
+
+    def value_of(self, dotted: str) -> object:
+        """The value of one leaf, e.g. `value_of("pitch.lines_kept")`; ParamsError when there
+        is none."""
+        node, leaf = _leaf_of(to_dict(self), dotted)
+        return node[leaf]
+
+
+def _leaf_of(data: dict[str, Any], dotted: str) -> tuple[dict[str, Any], str]:
+    """The dict holding the leaf `dotted` of nested parameter dicts, and the leaf's name;
+    ParamsError naming what is known where the name goes wrong."""
+    node = data
+    parts = dotted.split(".")
+    for part in parts[:-1]:
+        if not isinstance(node.get(part), dict):
+            groups = ", ".join(k for k, v in node.items() if isinstance(v, dict))
+            raise ParamsError(f"{dotted}: no such parameter group {part!r}; known here: {groups}")
+        node = node[part]
+    leaf = parts[-1]
+    if leaf not in node:
+        raise ParamsError(f"{dotted}: no such parameter; known here: {', '.join(node)}")
+    if isinstance(node[leaf], dict):
+        raise ParamsError(
+            f"{dotted}: no such parameter; known here: {', '.join(node)} ({dotted} is a "
+            f"group of parameters, not one; in it: {', '.join(node[leaf])})"
+        )
+    return node, leaf
 
 
 T = TypeVar("T")

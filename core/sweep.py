@@ -78,7 +78,7 @@ from core.evaluation.evaluate import PEDESTRIAN_STAGES, RecordingReport, evaluat
 from core.evaluation.objects import BoxScore
 from core.evaluation.report import Table, figures_json
 from core.io.errors import RecordingError
-from core.params import Params, ParamsError, from_dict, load_params, to_dict
+from core.params import Params, ParamsError, load_params, to_dict
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -190,35 +190,22 @@ def _read_yaml(p: Path) -> dict[str, Any]:
     return raw
 
 
-def _leaf(p: Path, section: str, data: dict[str, Any], name: object) -> object:
-    """The value of the dotted parameter `name` in `data` (the base as a dict), or SweepError
-    naming what is known where it goes wrong, as `Params.with_value` does."""
+def _leaf(p: Path, section: str, base: Params, name: object) -> object:
+    """The value of the dotted parameter `name` in `base`, or SweepError naming the file, the
+    section and what `Params.value_of` says is known there."""
     if not isinstance(name, str):
         raise SweepError(f"{p}: {section}: expected a parameter's dotted name, got {name!r}")
-    node: object = data
-    done: list[str] = []
-    for part in name.split("."):
-        if not isinstance(node, dict) or part not in node:
-            where = ".".join(done) or "the top"
-            known = ", ".join(node) if isinstance(node, dict) else "nothing (a value)"
-            raise SweepError(
-                f"{p}: {section}: {name}: no such parameter; known at {where}: {known}"
-            )
-        node = node[part]
-        done.append(part)
-    if isinstance(node, dict):
-        raise SweepError(
-            f"{p}: {section}: {name}: a group of parameters, not one; in it: {', '.join(node)}"
-        )
-    return node
+    try:
+        return base.value_of(name)
+    except ParamsError as err:
+        raise SweepError(f"{p}: {section}: {err}") from None
 
 
 def _grid(p: Path, grid: object, base: Params) -> tuple[tuple[str, ...], list[tuple[Any, ...]]]:
     if not isinstance(grid, dict) or not grid:
         raise SweepError(f"{p}: grid: expected a mapping of parameter: [values], got {grid!r}")
-    data = to_dict(base)
     for name, values in grid.items():
-        _leaf(p, "grid", data, name)
+        _leaf(p, "grid", base, name)
         if not isinstance(values, list) or not values:
             raise SweepError(
                 f"{p}: grid: {name}: expected a non-empty list of values, got {values!r}"
@@ -250,9 +237,8 @@ def _random(p: Path, spec: object, base: Params) -> tuple[tuple[str, ...], list[
             f"{p}: random: parameters: expected a mapping of parameter: {{low, high}} or "
             f"{{choices}}, got {parameters!r}"
         )
-    data = to_dict(base)
     draws = [
-        _sampler(p, name, how, _leaf(p, "random.parameters", data, name))
+        _sampler(p, name, how, _leaf(p, "random.parameters", base, name))
         for name, how in parameters.items()
     ]
     rng = np.random.default_rng(seed)
@@ -308,26 +294,13 @@ def _parameter_set(
 ) -> ParameterSet:
     """The base with every value of one combination, applied at once (the parameters check
     some values against others, e.g. min_distance_m < max_distance_m)."""
-    data = to_dict(base)
-    for name, value in zip(names, combination, strict=True):
-        *groups, leaf = name.split(".")
-        node = data
-        for g in groups:
-            node = node[g]
-        node[leaf] = value
     try:
-        params = from_dict(data)
+        params = base.with_values(dict(zip(names, combination, strict=True)))
     except ParamsError as err:
         given = ", ".join(f"{n}={v!r}" for n, v in zip(names, combination, strict=True))
         raise SweepError(f"{p}: {section}: the set {given}: {err}") from None
-    resolved = to_dict(params)
-    values = []
-    for name in names:
-        node = resolved
-        for part in name.split("."):
-            node = node[part]
-        values.append((name, node))
-    text = json.dumps(resolved, sort_keys=True)
+    values = [(name, params.value_of(name)) for name in names]
+    text = json.dumps(to_dict(params), sort_keys=True)
     digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:ID_HEX_DIGITS]
     return ParameterSet(digest, tuple(values), params)
 

@@ -87,6 +87,19 @@ def test_with_value_validates() -> None:
         Params().with_value("pitch", 1.0)
 
 
+def test_with_values_applies_values_checked_together_at_once() -> None:
+    base = Params()
+    # each alone would put the minimum above the maximum
+    with pytest.raises(ParamsError, match="min_distance_m"):
+        base.with_value("pedestrian.min_distance_m", 45.0)
+    both = base.with_values({"pedestrian.min_distance_m": 45.0, "pedestrian.max_distance_m": 60.0})
+    assert (both.pedestrian.min_distance_m, both.pedestrian.max_distance_m) == (45.0, 60.0)
+    assert both.value_of("pedestrian.max_distance_m") == 60.0
+    assert base.value_of("pitch.lines_kept") == base.pitch.lines_kept
+    with pytest.raises(ParamsError, match=r"^pitch: no such parameter; .*\(pitch is a group"):
+        base.value_of("pitch")
+
+
 def test_unknown_top_level_key_lists_the_groups(tmp_path: Path) -> None:
     path = _write(tmp_path, "pitchh:\n  lines_kept: 7\n")
     with pytest.raises(ParamsError) as info:

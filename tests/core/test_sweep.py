@@ -155,7 +155,8 @@ def test_a_misspelt_parameter_fails_naming_the_file_and_the_key(tmp_path: Path) 
         ("grid: 3\n", "grid: expected a mapping of parameter: [values], got 3"),
         ("grid: {pitch.lines_kept: 5}\n", "grid: pitch.lines_kept: expected a non-empty list"),
         ("grid: {pitch.lines_kept: []}\n", "grid: pitch.lines_kept: expected a non-empty list"),
-        ("grid: {pitch: [5]}\n", "grid: pitch: a group of parameters, not one"),
+        ("grid: {pitch: [5]}\n", "grid: pitch: no such parameter; known here: pitch, "),
+        ("grid: {pitch: [5]}\n", "(pitch is a group of parameters, not one; in it: "),
         (
             "grid: {pitch.lines_kept: [1]}\n",
             "grid: the set pitch.lines_kept=1: pitch.lines_kept: expected an integer >= 2, got 1",
