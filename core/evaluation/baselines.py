@@ -112,8 +112,11 @@ class BaselineScorer:
         result: FrameResult,
         truth: FrameTruth | None,
         calibrated_rad: float,
+        engine_mask: MaskScore | None,
     ) -> None:
-        """One frame, in order; truth None: MOG2 learns it, nothing is scored."""
+        """One frame, in order; truth None: MOG2 learns it, nothing is scored. engine_mask:
+        the engine's mask score on this frame (`evaluate._Scorer.add`), None without one;
+        MOG2 is scored on the same frames."""
         image = frame.image
         mask, mog2_ms = _timed(lambda: self.mog2.update(image, self.rows_px))
         if truth is None:
@@ -127,13 +130,16 @@ class BaselineScorer:
         engine, mog2 = MaskSplit(), MaskSplit()
         mask_times = Timing(), Timing()
         ms = result.motion_stereo
-        if ms.mode in ("motion_stereo", "background_subtraction"):
+        if engine_mask is not None:
             still = ms.mode == "background_subtraction"
-            first = ms.image_mask_first_row_px
-            engine, mog2 = (
-                _split(objects.score_mask(i, m, first, truth, p.motion_stereo, still), still)
-                for m in (ms.image_mask, mask[first : first + len(ms.image_mask)])
+            first, stop = (
+                ms.image_mask_first_row_px,
+                ms.image_mask_first_row_px + len(ms.image_mask),
             )
+            mog2_score = objects.score_mask(
+                i, mask[first:stop], first, truth, p.motion_stereo, still
+            )
+            engine, mog2 = _split(engine_mask, still), _split(mog2_score, still)
             mask_times = Timing((timings.motion_stereo_ms,)), Timing((mog2_ms,))
         self.frames.append(
             BaselineReport(

@@ -130,7 +130,9 @@ class _Scorer:
 
     def add(
         self, frame: FrameInput, result: FrameResult, truth: FrameTruth, calibrated_rad: float
-    ) -> None:
+    ) -> MaskScore | None:
+        """Score one frame; returns its motion-stereo mask score (None when the engine has
+        no mask on it), which the baselines split by whether the car moves."""
         p = self.params
         i = frame.index
         self.frames += 1
@@ -168,17 +170,17 @@ class _Scorer:
             objects.score_pedestrians(i, tracked, truth.objects, lo, hi)
         )
         ms = result.motion_stereo
+        mask = None
         if ms.mode in ("motion_stereo", "background_subtraction"):
-            self.mask.append(
-                objects.score_mask(
-                    i,
-                    ms.image_mask,
-                    ms.image_mask_first_row_px,
-                    truth,
-                    p.motion_stereo,
-                    ms.mode == "background_subtraction",
-                )
+            mask = objects.score_mask(
+                i,
+                ms.image_mask,
+                ms.image_mask_first_row_px,
+                truth,
+                p.motion_stereo,
+                ms.mode == "background_subtraction",
             )
+            self.mask.append(mask)
         self.pitch.append(
             objects.score_pitch(result.pitch.pitch_rad, truth.pitch_rad, calibrated_rad)
         )
@@ -186,6 +188,7 @@ class _Scorer:
         self.pedestrian_mot.update(
             i, _truth_people(truth, p), _track_boxes(result.tracked_pedestrians)
         )
+        return mask
 
     def report(self, name: str) -> RecordingReport:
         events = vehicles.event_stats(self.vehicle_frames)
@@ -234,10 +237,9 @@ def evaluate_recording(
             frame = drive.frame(i)
             result = engine.process(frame)
             truth = drive.truth(i)
-            if truth is not None:
-                scorer.add(frame, result, truth, calibrated)
+            mask = None if truth is None else scorer.add(frame, result, truth, calibrated)
             if baseline is not None:
-                baseline.add(frame, result, truth, calibrated)
+                baseline.add(frame, result, truth, calibrated, mask)
             if progress is not None:
                 progress(i + 1, len(drive))
         report = scorer.report(drive.path.name)
