@@ -334,4 +334,4 @@ class ClientSession:
                 handle.remove()
         self._panel_images = {}
         self._timeline = self._slider = self._play = self._readout = self._image = None
-        self._timings = None
+        self._timings = self._rate = None
