@@ -33,6 +33,7 @@ CHROMIUM_ARGS = [
 SCREENSHOT = Path("/tmp/inspector.png")
 ERROR_SCREENSHOT = Path("/tmp/inspector-error.png")
 TIMEOUT_MS = 30_000
+SETTLE_MS = 1_000  # longer than a seek's replay and render
 
 # The camera image: the one <img> viser fills from a blob with the rendered frame.
 CAMERA_IMG = "img[src^='blob:']"
@@ -112,6 +113,8 @@ def test_play_runs_to_the_end_and_pause_stops(recordings: Recordings, page: Page
         page.get_by_role("button", name="Play").click()  # from the end: starts over
         page.get_by_role("button", name="Pause").click()
         page.get_by_role("button", name="Play").wait_for(timeout=TIMEOUT_MS)
+        # a frame stepped to just before the pause may still be rendering: let it arrive
+        page.wait_for_timeout(SETTLE_MS)
         paused_at = readout.inner_text()
         page.wait_for_timeout(500)
         assert readout.inner_text() == paused_at
