@@ -40,7 +40,8 @@ CAMERA_IMG = "img[src^='blob:']"
 
 
 @pytest.fixture(scope="module")
-def browser() -> Iterator[Browser]:
+def browser(recordings: Recordings) -> Iterator[Browser]:
+    """Headless Chromium; after `recordings`, which also compiles the engine first."""
     if not CHROMIUM.exists():
         message = f"headless browser tests need Debian chromium at {CHROMIUM}"
         if os.environ.get("CI") or os.environ.get("REQUIRE_BROWSER"):
