@@ -1,21 +1,25 @@
 """The live parameter panel: a field for every parameter of `core.params.Params`, grouped by
-stage, each with its unit and the paper's value, and a reset to the papers' values.
+stage, each with its unit and the paper's value; undo and redo; compare with a set B;
+presets; reset one parameter or all to the papers' values.
 
-The panel only reports what the user typed (`on_change(dotted_name, value)`); the session
-checks it with `Params.with_value` and shows the outcome with `show`. Values set here by the
-server (`show`) do not come back as changes.
+The panel hands what the user did to `app.param_sets.ParamSets`, which checks and records
+it; the session calls `show` with the outcome. Values set here by the server (`show`) do not
+come back as changes (viser reports them with no client).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import fields
-from typing import Any
+from pathlib import Path
+from typing import Any, Literal
 
 import viser
 
-from core.params import Params, to_dict
+from app.param_sets import ParamSets, Sets, changed_names
+from core.params import Params, ParamsError, to_dict
 
 # a parameter's unit, from the end of its name (core/params.py names carry their units)
 UNIT_SUFFIXES = (
@@ -48,32 +52,73 @@ def hint(name: str, paper_value: object) -> str:
     return f"{unit + '; ' if unit else ''}paper: {paper_value}"
 
 
+NO_CHOICE = "(none)"
+NoticeColour = Literal["red", "green", "gray"]
+
+
 class ParamsPanel:
-    """The "Parameters" folder of one client's page."""
+    """The "Parameters" folder of one client's page: undo and redo, A/B, presets, resets and
+    a field per parameter. Every control calls `sets`; a refusal (ParamsError) goes to
+    `notify(title, message, "red")` and the fields show the values in use again."""
 
     def __init__(
         self,
         gui: viser.GuiApi,
-        on_change: Callable[[str, object], None],
-        on_reset: Callable[[], None],
+        sets: ParamSets,
+        notify: Callable[[str, str, NoticeColour], None],
         order: int,
     ) -> None:
+        self._sets = sets
+        self._notify = notify
         self._handles: dict[str, Any] = {}
         with gui.add_folder("Parameters", order=order, expand_by_default=False):
+            history = gui.add_button_group("history", ("Undo", "Redo"))
+            self._compare = gui.add_checkbox(
+                "compare with B", False, hint="run a second parameter set B beside A"
+            )
+            self._editing = gui.add_dropdown(
+                "fields edit", ("A", "B"), initial_value="A", disabled=True
+            )
+            swap = gui.add_button("Swap A and B", icon=viser.Icon.ARROWS_EXCHANGE, disabled=True)
+            self._swap = swap
+            with gui.add_folder("Presets", expand_by_default=False):
+                self._preset_name = gui.add_text("name", "", hint="letters, digits, - and _")
+                save = gui.add_button("Save the edited set", icon=viser.Icon.DEVICE_FLOPPY)
+                self._preset = gui.add_dropdown("preset", (NO_CHOICE,))
+                load = gui.add_button("Load into the edited set", icon=viser.Icon.FOLDER_OPEN)
+            self._changed = gui.add_dropdown("changed", (NO_CHOICE,), hint="from the papers")
+            reset_one = gui.add_button("Reset it to the paper's value", icon=viser.Icon.RESTORE)
             reset = gui.add_button("Reset all to the papers' values", icon=viser.Icon.RESTORE)
-            reset.on_click(lambda _: on_reset())
-            stage_names = [f.name for f in fields(Params)]
             rows = parameter_names(Params())
-            for stage in stage_names:
+            for stage in (f.name for f in fields(Params)):
                 with gui.add_folder(stage, expand_by_default=False):
                     for _, name, value in (r for r in rows if r[0] == stage):
                         self._handles[f"{stage}.{name}"] = self._field(gui, name, value)
+        history.on_click(lambda e: self._do(sets.undo if e.target.value == "Undo" else sets.redo))
+        self._compare.on_update(
+            lambda e: self._do(lambda: sets.set_comparing(e.target.value)) if e.client else None
+        )
+        self._editing.on_update(
+            lambda e: (
+                self._do(lambda: sets.set_editing("B" if e.target.value == "B" else "A"))
+                if e.client
+                else None
+            )
+        )
+        swap.on_click(lambda _: self._do(sets.swap))
+        save.on_click(lambda _: self._save_preset())
+        load.on_click(lambda _: self._do(lambda: sets.load_preset(self._preset.value)))
+        reset_one.on_click(lambda _: self._reset_one())
+        reset.on_click(lambda _: self._do(sets.reset_all))
         for dotted, handle in self._handles.items():
             handle.on_update(
                 lambda event, dotted=dotted: (
-                    on_change(dotted, event.target.value) if event.client is not None else None
+                    self._do(functools.partial(sets.set_value, dotted, event.target.value))
+                    if event.client is not None
+                    else None
                 )
             )
+        self.show(sets.sets)
 
     @staticmethod
     def _field(gui: viser.GuiApi, name: str, paper_value: object) -> Any:
@@ -85,12 +130,40 @@ class ParamsPanel:
         assert isinstance(paper_value, float), f"{name}: a parameter of unexpected type"
         return gui.add_number(label, paper_value, step=_step(paper_value), hint=tip)
 
-    def show(self, params: Params) -> None:
-        """Put `params`' values in the fields (a reset, a refused value, a loaded preset)."""
-        for stage, name, value in parameter_names(params):
+    def show(self, sets: Sets) -> None:
+        """Put the edited set's values, what differs from the papers and the A/B choice in
+        the controls (after any change, an undo, a refusal)."""
+        for stage, name, value in parameter_names(sets.edited):
             handle = self._handles[f"{stage}.{name}"]
             if handle.value != value:
                 handle.value = value
+        changed = changed_names(sets.edited)
+        self._changed.options = tuple(changed) or (NO_CHOICE,)
+        self._compare.value = sets.b is not None  # type: ignore[misc]  # asymmetric property
+        self._editing.value = sets.editing  # type: ignore[misc]
+        self._editing.disabled = self._swap.disabled = sets.b is None
+        self._preset.options = tuple(self._sets.presets.names()) or (NO_CHOICE,)
+
+    def _do(self, action: Callable[[], object]) -> None:
+        try:
+            action()
+        except ParamsError as err:
+            title, _, message = str(err).partition(": ")
+            self._notify(f"{title}: refused", message or str(err), "red")
+            self.show(self._sets.sets)
+
+    def _save_preset(self) -> None:
+        def save() -> None:
+            path = self._sets.save_preset(self._preset_name.value)
+            self._preset.options = tuple(self._sets.presets.names())
+            self._preset.value = Path(path).stem  # type: ignore[misc]
+            self._notify("Preset saved", path, "green")
+
+        self._do(save)
+
+    def _reset_one(self) -> None:
+        if self._changed.value != NO_CHOICE:
+            self._do(functools.partial(self._sets.reset_value, self._changed.value))
 
 
 def _step(value: float) -> float:

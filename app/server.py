@@ -1,7 +1,7 @@
 """The inspector's web server: one viser server, a session per client, a render worker per drive.
 
-    serve(recordings_root, recording, host, port)      # `fusionscope serve`, blocks until Ctrl-C
-    server = InspectorServer(root, None, "127.0.0.1", 0); port = server.start(); ...; server.stop()
+    serve(recordings_root, recording, host, port, presets)   # `fusionscope serve`, until Ctrl-C
+    server = InspectorServer(root, None, "127.0.0.1", 0, presets=folder); server.start(); ...
 
 Only recordings listed by `app.catalog` under the recordings root are opened. A recording
 that cannot be opened is reported on the page of the client that asked for it; the server
@@ -21,9 +21,10 @@ import viser
 
 from app.catalog import list_recordings, resolve_recording
 from app.engines import ClientEngines, FrameCache
+from app.presets import PresetStore
 from app.session import ClientSession
 from app.state import ViewState
-from app.view import FrameSource, FrameView, render_view
+from app.view import CanSeries, FrameSource, FrameView, can_series, render_view
 from app.worker import RenderWorker
 from core.io import Drive
 from core.io.errors import RecordingError
@@ -44,12 +45,14 @@ class _OpenDrive:
     drive: FrameSource
     engines: ClientEngines
     worker: RenderWorker[int, ViewState, FrameView | Exception]
+    can: CanSeries
 
 
 class InspectorServer:
     """The inspector on `host:port` (port 0: any free port) for recordings under `recordings_root`.
 
-    `recording` names the recording new clients see first (default: the first by name).
+    `recording` names the recording new clients see first (default: the first by name);
+    `presets` is the folder parameter presets are saved in (the only place it writes).
     Raises ValueError when the root is not a folder or `recording` is not under it.
     """
 
@@ -60,6 +63,8 @@ class InspectorServer:
         host: str = "127.0.0.1",
         port: int = 8080,
         open_drive: DriveOpener = open_drive,
+        *,
+        presets: Path,
     ) -> None:
         self.recordings_root = Path(recordings_root).resolve()
         self.recordings = list_recordings(self.recordings_root)
@@ -69,6 +74,7 @@ class InspectorServer:
         self.host = host
         self.requested_port = port
         self._open_drive = open_drive
+        self.presets = PresetStore(presets)
         self._drives: dict[str, _OpenDrive] = {}
         self._sessions: dict[int, ClientSession] = {}
         self._lock = threading.Lock()
@@ -108,7 +114,7 @@ class InspectorServer:
     # --- clients ------------------------------------------------------------------------
     def _connect(self, client: viser.ClientHandle) -> None:
         session = ClientSession(
-            client, self.recordings, self.default_recording, self._show_recording
+            client, self.recordings, self.default_recording, self._show_recording, self.presets
         )
         with self._lock:
             self._sessions[client.client_id] = session
@@ -128,7 +134,8 @@ class InspectorServer:
             session.close()
         for entry in drives:
             entry.worker.forget(client.client_id)
-            entry.engines.forget(client.client_id)
+            for which in ("A", "B"):
+                entry.engines.forget((client.client_id, which))
 
     def _show_recording(self, session: ClientSession, name: str) -> None:
         try:
@@ -149,6 +156,7 @@ class InspectorServer:
             entry.drive.frame_rate_hz,
             lambda state: entry.worker.submit(client_id, state),
             entry.drive.notes,
+            entry.can,
         )
 
     # --- drives -------------------------------------------------------------------------
@@ -163,8 +171,12 @@ class InspectorServer:
 
             def render(client_id: int, state: ViewState) -> FrameView | Exception:
                 try:
-                    result = engines.result(client_id, frames, state.params, state.frame)
-                    return render_view(drive, state, result, frames.frame(state.frame))
+                    index = state.frame
+                    result = engines.result((client_id, "A"), frames, state.params, index)
+                    result_b = None
+                    if state.params_b is not None:
+                        result_b = engines.result((client_id, "B"), frames, state.params_b, index)
+                    return render_view(drive, state, result, frames.frame(index), result_b)
                 except RecordingError as err:  # a damaged frame: say so on the page
                     return err
                 except Exception as err:  # the page says so; the log keeps the traceback
@@ -184,14 +196,16 @@ class InspectorServer:
                     session.show_view(name, view)
 
             worker = RenderWorker(render, publish, name=f"render-{name}")
-            entry = _OpenDrive(drive, engines, worker)
+            entry = _OpenDrive(drive, engines, worker, can_series(drive))
             self._drives[name] = entry
             return entry
 
 
-def serve(recordings_root: Path, recording: str | None, host: str, port: int) -> None:
-    """Run the inspector until Ctrl-C."""
-    inspector = InspectorServer(recordings_root, recording, host, port)
+def serve(
+    recordings_root: Path, recording: str | None, host: str, port: int, presets: Path
+) -> None:
+    """Run the inspector until Ctrl-C; presets are saved in the folder `presets`."""
+    inspector = InspectorServer(recordings_root, recording, host, port, presets=presets)
     bound = inspector.start()
     print(f"fusionscope inspector: http://{host}:{bound}  (Ctrl-C to stop)")
     try:

@@ -1,23 +1,41 @@
 """One browser tab: its controls, its `ViewState`, its playback thread, its panels.
 
 Controls only replace the state and ask for a render; the render worker runs the engine and
-draws, and `show_view` puts the finished pictures, read-out and timings on the page in one
-atomic update.
+draws, and `show_view` puts the finished pictures, read-out, timings, CAN plot and A/B list
+on the page in one atomic update. Parameter changes go through the tab's
+`app.param_sets.ParamSets` (undo, redo, presets, A and B).
 """
 
 from __future__ import annotations
 
 import functools
 import threading
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 import viser
+import viser.uplot
 
-from app.params_panel import ParamsPanel
-from app.state import Layers, ViewState
-from app.view import OVERLAY_OF_LAYER, FrameView, timings_markdown
-from core.params import Params, ParamsError
+from app.bird_eye import BirdEyeScene, top_down_view
+from app.draw import RgbImage
+from app.history import History
+from app.param_sets import ParamSets, Sets
+from app.params_panel import NoticeColour, ParamsPanel
+from app.presets import PresetStore
+from app.state import Layers, Panels, ViewState
+from app.view import (
+    CAN_WINDOW_HALF_S,
+    OVERLAY_OF_LAYER,
+    PANEL_TITLES,
+    CanSeries,
+    FrameView,
+    can_window,
+    median_timings,
+    timings_markdown,
+)
+from core.engine import StageTimings
+from core.params import ParamsError
 
 CAMERA_PANEL_WIDTH_PX = 680
 WAITING_TEXT = "rendering…"
@@ -25,9 +43,16 @@ MARKDOWN_SPECIALS = "\\`*_{}[]<>()#+-.!|~"
 PLAYBACK_RATES = ("0.25x", "0.5x", "1x", "2x", "4x")  # of the drive's own frame rate
 # the layers' checkbox labels: the overlays' own names
 LAYER_LABELS = {**OVERLAY_OF_LAYER, "truth": "ground truth"}
+PANEL_LABELS = {
+    "bird_eye": "bird's-eye view (3D)",
+    **{name: title.lower() for name, title in PANEL_TITLES.items()},
+    "can": "CAN speed and yaw rate",
+}
+TIMINGS_WINDOW = 50  # frames in the running median of the stage timings
+NOTICE_SECONDS = 8.0
 
 
-def _run_command(action: Callable[[], None], _: object) -> None:
+def _run_command(action: Callable[[], object], _: object) -> None:
     action()
 
 
@@ -50,6 +75,7 @@ class ClientSession:
         recordings: list[str],
         selected: str | None,
         on_pick_recording: Callable[[ClientSession, str], None],
+        presets: PresetStore,
     ) -> None:
         self.client = client
         self.recording: str | None = None
@@ -61,6 +87,10 @@ class ClientSession:
         self._stop_playing = threading.Event()
         self._player: threading.Thread | None = None
         self._on_pick_recording = on_pick_recording
+        self._can: CanSeries | None = None
+        self._recent_timings: deque[StageTimings] = deque(maxlen=TIMINGS_WINDOW)
+        self._history = History()
+        self._param_sets = ParamSets(presets, self._history, self._set_params)
 
         gui = client.gui
         self._message = gui.add_markdown("", order=0)
@@ -85,7 +115,14 @@ class ClientSession:
             }
         for box in self._layer_boxes.values():
             box.on_update(lambda _: self._set_layers())
-        self._params_panel = ParamsPanel(gui, self.set_parameter, self.reset_parameters, order=4)
+        with gui.add_folder("Panels", order=4, expand_by_default=False):
+            self._panel_boxes = {
+                name: gui.add_checkbox(PANEL_LABELS[name], getattr(self._state.panels, name))
+                for name in Panels.names()
+            }
+        for box in self._panel_boxes.values():
+            box.on_update(lambda _: self._set_panels())
+        self._params_panel = ParamsPanel(gui, self._param_sets, self.notify, order=5)
         self._add_commands(gui)
 
         gui.main_panel.dock_left()
@@ -95,8 +132,16 @@ class ClientSession:
         self._camera_panel.dock_right()
         self._camera_panel.set_width(CAMERA_PANEL_WIDTH_PX)
         self._image: viser.GuiImageHandle | None = None
+        self._diff: viser.GuiMarkdownHandle | None = None
+        self._can_plot: viser.GuiUplotHandle | None = None
         self._timings: viser.GuiMarkdownHandle | None = None
+        self._panel_tabs: dict[str, viser.GuiTabHandle] = {}
         self._panel_images: dict[str, viser.GuiImageHandle] = {}
+        self._bird_eyes = (
+            BirdEyeScene(client.scene, "/bird_eye_a"),
+            BirdEyeScene(client.scene, "/bird_eye_b"),
+        )
+        self._views_aimed_at = 0  # bird's-eye views the 3D camera was last pointed at
 
     # --- what the server tells this client ----------------------------------------------
     def show_error(self, headline: str, detail: str = "") -> None:
@@ -116,11 +161,12 @@ class ClientSession:
         frame_rate_hz: float,
         request: Callable[[ViewState], None],
         notes: Sequence[str] = (),
+        can: CanSeries | None = None,
     ) -> None:
         """Build the timeline for a drive of `frame_count` frames and render its first frame.
 
         notes: what the viewer should know about the recording (assumptions, what was skipped
-        on reading), listed under its name.
+        on reading), listed under its name. can: its CAN signals for the plot.
         """
         self._drop_drive()
         gui = self.client.gui
@@ -130,6 +176,8 @@ class ClientSession:
             self._frame_rate_hz = frame_rate_hz
             self._request = request
             self._state = replace(self._state, frame=0, playing=False)
+            self._can = can
+            self._recent_timings.clear()
         self._camera_panel.visible = True
         self._message.content = (
             f"**{_escape_markdown(name)}** — {frame_count} frames at {frame_rate_hz:.1f} Hz"
@@ -165,23 +213,89 @@ class ClientSession:
         if recording != self.recording or self._readout is None:
             return
         gui = self.client.gui
+        self._recent_timings.append(view.timings)
         with self.client.atomic():
             if self._image is None:
                 with self._camera_tab:
                     self._image = gui.add_image(view.image, format="jpeg")
+                    self._diff = gui.add_markdown("")
                 with self._timings_tab:
                     self._timings = gui.add_markdown("")
             else:
                 self._image.image = view.image
-            for title, image in view.panels:
-                if title in self._panel_images:
-                    self._panel_images[title].image = image
-                else:
-                    with self._camera_panel.add_tab(title):
-                        self._panel_images[title] = gui.add_image(image, format="jpeg")
+            if self._diff is not None:
+                self._diff.content = view.diff
+            self._show_can(view.frame)
+            self._show_panels(view.panels)
+            self._show_bird_eyes(view)
             if self._timings is not None:
-                self._timings.content = timings_markdown(view.timings)
+                median = median_timings(self._recent_timings)
+                frames = len(self._recent_timings)
+                self._timings.content = timings_markdown(view.timings, median, frames)
             self._readout.content = f"`{view.readout}`"
+
+    def _show_can(self, frame: int) -> None:
+        """The CAN plot around `frame` (removed when switched off or without CAN)."""
+        wanted = self._state.panels.can and self._can is not None
+        if not wanted or self._can is None:
+            if self._can_plot is not None:
+                self._can_plot.remove()
+                self._can_plot = None
+            return
+        data = can_window(self._can, frame)
+        if self._can_plot is not None:
+            self._can_plot.data = data
+            return
+        with self._camera_tab:
+            self._can_plot = self.client.gui.add_uplot(
+                data,
+                (
+                    viser.uplot.Series(label="t s"),
+                    viser.uplot.Series(label="speed km/h", stroke="#1f77b4", width=2, scale="kmh"),
+                    viser.uplot.Series(label="yaw deg/s", stroke="#d62728", width=2, scale="degps"),
+                    viser.uplot.Series(
+                        label="playhead",
+                        stroke="#000000",
+                        scale="kmh",
+                        points={"show": True, "size": 10, "fill": "#000000"},
+                    ),
+                ),
+                title=f"CAN around the playhead (±{CAN_WINDOW_HALF_S:g} s)",
+                scales={"x": {"time": False}, "kmh": {"auto": True}, "degps": {"auto": True}},
+                axes=(
+                    {"label": "t s"},
+                    {"scale": "kmh", "label": "km/h"},
+                    {"scale": "degps", "label": "deg/s", "side": 1},
+                ),
+                aspect=3.0,
+            )
+
+    def _show_bird_eyes(self, view: FrameView) -> None:
+        """A's bird's-eye view and B's beside it in the 3D scene; the camera is pointed at
+        them when their number changes."""
+        for scene, (geometry, texture) in zip(self._bird_eyes, view.bird_eyes, strict=False):
+            scene.show(geometry, texture)
+        for scene in self._bird_eyes[len(view.bird_eyes) :]:
+            scene.remove()
+        if view.bird_eyes and len(view.bird_eyes) != self._views_aimed_at:
+            centre_y_m = view.bird_eyes[-1][0].texture_position_m[1] / 2
+            top_down_view(self.client.camera, self._state.params, centre_y_m)
+        self._views_aimed_at = len(view.bird_eyes)
+
+    def _show_panels(self, images: Sequence[tuple[str, RgbImage]]) -> None:
+        """The stage panels' tabs: new images in place, a tab per panel switched on."""
+        gui = self.client.gui
+        shown = {title for title, _ in images}
+        for title in [t for t in self._panel_tabs if t not in shown]:
+            self._panel_tabs.pop(title).remove()
+            self._panel_images.pop(title, None)
+        for title, image in images:
+            if title in self._panel_images:
+                self._panel_images[title].image = image
+            else:
+                self._panel_tabs[title] = tab = self._camera_panel.add_tab(title)
+                with tab:
+                    self._panel_images[title] = gui.add_image(image, format="jpeg")
 
     def show_frame_error(self, recording: str, frame: int, what: str, message: str) -> None:
         """Say in the read-out what went wrong with `frame` (the image keeps the last frame)."""
@@ -229,25 +343,9 @@ class ClientSession:
             self._play.label = "Pause" if playing else "Play"
             self._play.icon = viser.Icon.PLAYER_PAUSE if playing else viser.Icon.PLAYER_PLAY
 
-    def set_parameter(self, dotted: str, value: object) -> None:
-        """Run the engine with one parameter changed; a value the parameters refuse is
-        reported on the page and the field goes back to the value in use."""
-        with self._lock:
-            current = self._state.params
-        try:
-            params = current.with_value(dotted, value)
-        except ParamsError as err:
-            self.client.add_notification(
-                f"{dotted}: value refused", str(err), color="red", auto_close_seconds=8.0
-            )
-            self._params_panel.show(current)
-            return
-        self._set_params(params)
-
-    def reset_parameters(self) -> None:
-        """Every parameter back to the papers' value."""
-        self._set_params(Params())
-        self._params_panel.show(Params())
+    def notify(self, title: str, message: str, color: NoticeColour = "red") -> None:
+        """A notification in this tab's page (a refused value, a saved preset)."""
+        self.client.add_notification(title, message, color=color, auto_close_seconds=NOTICE_SECONDS)
 
     def close(self) -> None:
         """The client left: stop playback."""
@@ -269,30 +367,58 @@ class ClientSession:
 
     def _add_commands(self, gui: viser.GuiApi) -> None:
         """Keyboard commands (viser's command palette) and a panel that lists them."""
-        keys: list[tuple[str, str, Callable[[], None]]] = [
-            ("Play / pause", "space", self._toggle_playing),
-            ("Step back one frame", "arrowleft", functools.partial(self.step, -1)),
-            ("Step on one frame", "arrowright", functools.partial(self.step, +1)),
-            ("Go to the first frame", "home", functools.partial(self.go_to, 0)),
-            ("Go to the last frame", "end", self._go_to_end),
+        sets = self._param_sets
+        # (label, key, modifier, action)
+        keys: list[tuple[str, str, str | None, Callable[[], object]]] = [
+            ("Play / pause", "space", None, self._toggle_playing),
+            ("Step back one frame", "arrowleft", None, functools.partial(self.step, -1)),
+            ("Step on one frame", "arrowright", None, functools.partial(self.step, +1)),
+            ("Go to the first frame", "home", None, functools.partial(self.go_to, 0)),
+            ("Go to the last frame", "end", None, self._go_to_end),
+            ("Undo a parameter change", "Z", "cmd/ctrl", self._undo),
+            ("Redo a parameter change", "Z", "cmd/ctrl+shift", self._redo),
+            ("Compare with B on / off", "C", None, self._toggle_comparing),
+            ("Swap A and B", "S", None, functools.partial(self._guarded, sets.swap)),
         ]
         keys += [
             (
                 f"Toggle layer: {LAYER_LABELS[name]}",
                 str(k),
+                None,
                 functools.partial(self._toggle_layer, name),
             )
             for k, name in zip("1234567890", Layers.names(), strict=False)
         ]
         lines = ["| key | does |", "| --- | --- |"]
-        for label, hotkey, action in keys:
-            command = gui.add_command(label, hotkey=hotkey)  # type: ignore[arg-type]
+        for label, hotkey, modifier, action in keys:
+            command = gui.add_command(label, hotkey=hotkey, modifier=modifier)  # type: ignore[arg-type]
             command.on_trigger(functools.partial(_run_command, action))
-            lines.append(f"| {hotkey} | {label} |")
-        with gui.add_folder("Keys", order=5, expand_by_default=False):
+            shown = (
+                hotkey if modifier is None else f"{modifier.replace('cmd/ctrl', 'Ctrl')}+{hotkey}"
+            )
+            lines.append(f"| {shown} | {label} |")
+        with gui.add_folder("Keys", order=7, expand_by_default=False):
             gui.add_markdown(
                 "\n".join(lines) + "\n\nThe command palette (Ctrl+K / Cmd+K) lists them too."
             )
+
+    def _guarded(self, action: Callable[[], object]) -> None:
+        """Run a parameter action from a key; a refusal becomes a notification."""
+        try:
+            action()
+        except ParamsError as err:
+            self.notify("Not possible", str(err))
+
+    def _undo(self) -> None:
+        if self._param_sets.undo() is None:
+            self.notify("Nothing to undo", "no parameter change left to undo", "gray")
+
+    def _redo(self) -> None:
+        if self._param_sets.redo() is None:
+            self.notify("Nothing to redo", "no undone parameter change to redo", "gray")
+
+    def _toggle_comparing(self) -> None:
+        self._param_sets.set_comparing(self._param_sets.sets.b is None)
 
     def _toggle_playing(self) -> None:
         self.set_playing(not self._state.playing)
@@ -304,9 +430,17 @@ class ClientSession:
         box = self._layer_boxes[name]
         box.value = not box.value  # type: ignore[misc]  # its update callback sets the layers
 
-    def _set_params(self, params: Params) -> None:
+    def _set_params(self, sets: Sets) -> None:
+        """The parameter sets changed (an edit, undo, redo, a preset): show and run them."""
         with self._lock:
-            self._state = replace(self._state, params=params)
+            self._state = replace(self._state, params=sets.a, params_b=sets.b)
+        self._params_panel.show(sets)
+        self._submit()
+
+    def _set_panels(self) -> None:
+        panels = Panels(**{name: box.value for name, box in self._panel_boxes.items()})
+        with self._lock:
+            self._state = replace(self._state, panels=panels)
         self._submit()
 
     def _set_layers(self) -> None:
@@ -329,9 +463,14 @@ class ClientSession:
             self._frame_count = 0
         if self._timeline is not None:
             self._timeline.remove()
-        for handle in (self._image, self._timings, *self._panel_images.values()):
+        for handle in (self._image, self._diff, self._can_plot, self._timings):
             if handle is not None:
                 handle.remove()
-        self._panel_images = {}
+        for tab in self._panel_tabs.values():
+            tab.remove()
+        for scene in self._bird_eyes:
+            scene.remove()
+        self._views_aimed_at = 0
+        self._panel_tabs, self._panel_images = {}, {}
         self._timeline = self._slider = self._play = self._readout = self._image = None
-        self._timings = self._rate = None
+        self._timings = self._rate = self._diff = self._can_plot = None

@@ -1,5 +1,5 @@
-"""What one browser tab is looking at: the frame, whether it plays, which layers are shown,
-and the parameter set the engine runs with.
+"""What one browser tab is looking at: the frame, whether it plays, which layers and panels
+are shown, and the parameter sets the engine runs with (A, and B when comparing).
 
 The state is a small frozen value; controls replace it with `dataclasses.replace` and the
 renderer only ever sees a snapshot, so a frame's image and its overlays always agree.
@@ -33,14 +33,33 @@ class Layers:
 
 
 @dataclass(frozen=True)
+class Panels:
+    """Which pictures beside the camera are drawn (a panel switched off costs nothing)."""
+
+    bird_eye: bool = True  # the bird's-eye view in the 3D scene
+    motion_stereo: bool = True  # A, warped B, C, D and the reprojected mask
+    symmetry: bool = True  # one symmetry matrix per searched radar target
+    pedestrians: bool = True  # the pedestrian symmetry over the strip
+    guard_rails: bool = True  # the guard-rail edge images
+    can: bool = True  # CAN speed and yaw rate around the playhead
+
+    @staticmethod
+    def names() -> tuple[str, ...]:
+        return tuple(f.name for f in fields(Panels))
+
+
+@dataclass(frozen=True)
 class ViewState:
-    """Per-client view: frame index into the drive, playback flag, overlay layers, and the
-    parameters the engine runs with."""
+    """Per-client view: frame index into the drive, playback flag, overlay layers, panels,
+    the parameters the engine runs with, and a second set B to compare with (None: no
+    comparison)."""
 
     frame: int = 0
     playing: bool = False
     layers: Layers = field(default_factory=Layers)
     params: Params = field(default_factory=Params)
+    panels: Panels = field(default_factory=Panels)
+    params_b: Params | None = None
 
     def __post_init__(self) -> None:
         if self.frame < 0:

@@ -1,15 +1,19 @@
-"""One rendered frame for one client: the camera image with the engine's overlays, the stage
-panels and the read-out, all from the same `FrameResult`.
+"""One rendered frame for one client: the camera image with the engine's overlays (A and B
+side by side when comparing), the stage panels switched on, the list of detections A and B
+disagree on, and the read-out, all from the same frame.
 
 `render_view` is what the render worker runs after the engine: it draws with `app.draw`,
 `app.overlays` and `app.panels` and returns everything together, so a frame's picture is
-never published with another frame's overlays or read-out.
+never published with another frame's overlays or read-out. Also here: the CAN signals
+around the playhead and the running median of the stage timings, as the page shows them.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import statistics
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Protocol
 
@@ -17,14 +21,28 @@ import numpy as np
 import numpy.typing as npt
 
 from app import draw, overlays, panels
+from app.bird_eye import BirdEyeGeometry, bird_eye_geometry
 from app.state import Layers, ViewState
 from core.camera import CameraModel
+from core.compare import Detection, diff_detections
 from core.engine import FrameResult, StageTimings
 from core.io.frame import FrameInput
 from core.io.groundtruth import FrameTruth
+from core.params import Params
 
 MPS_TO_KMH = 3.6
 NS_PER_S = 1e9
+CAN_WINDOW_HALF_S = 5.0  # the CAN plot shows this long before and after the playhead
+AB_GAP_PX = 8  # between the A and B camera pictures
+AB_GAP_COLOUR = (255, 255, 255)
+AB_BIRD_EYE_GAP_M = 2.0  # between the A and B bird's-eye views in the 3D scene
+# the stage panels' tab titles, by their switch in `app.state.Panels`
+PANEL_TITLES = {
+    "motion_stereo": "Motion stereo",
+    "symmetry": "Symmetry",
+    "pedestrians": "Pedestrians",
+    "guard_rails": "Guard rails",
+}
 # the state's layers as app.overlays names them (ground truth is app.draw's)
 OVERLAY_OF_LAYER = {
     "radar": "radar",
@@ -54,22 +72,31 @@ class FrameSource(Protocol):
     def frame_rate_hz(self) -> float: ...
     @property
     def notes(self) -> tuple[str, ...]: ...
+    @property
+    def has_truth(self) -> bool: ...
     def __len__(self) -> int: ...
     def frame(self, index: int) -> FrameInput: ...
     def truth(self, index: int) -> FrameTruth | None: ...
+    def speed_at(self, t_ns: int) -> float: ...
+    def yaw_rate_at(self, t_ns: int) -> float: ...
     def close(self) -> None: ...
 
 
 @dataclass(frozen=True, eq=False)
 class FrameView:
-    """A rendered frame: its index, the (H + strip, W, 3) uint8 RGB camera picture, the
-    read-out line, the engine's stage timings, and the stage panels as (title, RGB image)."""
+    """A rendered frame: its index, the (H + strip, W, 3) uint8 RGB camera picture (A and B
+    side by side, (H + strip, 2 W + gap, 3), when comparing), the read-out line, set A's
+    stage timings, the stage panels switched on as (title, RGB image), and the markdown
+    list of detections only A or only B has ("" when not comparing); the bird's-eye views
+    as (geometry, ground texture) for A, and B beside it, when that panel is on."""
 
     frame: int
     image: draw.RgbImage
     readout: str
     timings: StageTimings
     panels: tuple[tuple[str, draw.RgbImage], ...] = ()
+    diff: str = ""
+    bird_eyes: tuple[tuple[BirdEyeGeometry, draw.RgbImage], ...] = ()
 
 
 def readout_text(
@@ -88,37 +115,108 @@ def readout_text(
     return f"frame {index} / {count - 1} | t {t_s:.2f} s | {speed} | {yaw}"
 
 
-def timings_markdown(t: StageTimings) -> str:
-    """This frame's stage times as a markdown table."""
+def timings_markdown(t: StageTimings, median: StageTimings | None = None, frames: int = 0) -> str:
+    """This frame's stage times as a markdown table, beside the running median over the
+    last `frames` frames shown when given."""
     rows = [
-        ("pitch", t.pitch_ms),
-        ("motion stereo", t.motion_stereo_ms),
-        ("search areas + guard rails", t.guardrail_ms),
-        ("vehicles", t.vehicle_ms),
-        ("pedestrians", t.pedestrian_ms),
-        ("tracking", t.tracking_ms),
-        ("**total**", t.total_ms),
+        ("pitch", "pitch_ms"),
+        ("motion stereo", "motion_stereo_ms"),
+        ("search areas + guard rails", "guardrail_ms"),
+        ("vehicles", "vehicle_ms"),
+        ("pedestrians", "pedestrian_ms"),
+        ("tracking", "tracking_ms"),
+        ("**total**", "total_ms"),
     ]
-    return "| stage | ms |\n| --- | ---: |\n" + "\n".join(f"| {n} | {ms:.2f} |" for n, ms in rows)
+    if median is None:
+        head = "| stage | ms |\n| --- | ---: |\n"
+        return head + "\n".join(f"| {n} | {getattr(t, a):.2f} |" for n, a in rows)
+    head = f"| stage | ms | median of {frames} |\n| --- | ---: | ---: |\n"
+    return head + "\n".join(
+        f"| {n} | {getattr(t, a):.2f} | {getattr(median, a):.2f} |" for n, a in rows
+    )
 
 
 def render_view(
-    drive: FrameSource, state: ViewState, result: FrameResult, frame: FrameInput
+    drive: FrameSource,
+    state: ViewState,
+    result: FrameResult,
+    frame: FrameInput,
+    result_b: FrameResult | None = None,
 ) -> FrameView:
-    """Frame `state.frame` of `drive` (`frame`, and the engine's `result` on it) with the
-    layers of `state`. Raises ValueError when `result` or `frame` is of another frame."""
-    if not (result.index == frame.index == state.frame):
-        raise ValueError(
-            f"result, frame: expected frame {state.frame}, got {result.index} and {frame.index}"
+    """Frame `state.frame` of `drive` (`frame`, and the engine's `result` on it; `result_b`
+    under set B when comparing) with the layers and panels of `state`. Raises ValueError
+    when a result or `frame` is of another frame."""
+    indices = (result.index, frame.index) + (() if result_b is None else (result_b.index,))
+    if any(i != state.frame for i in indices):
+        raise ValueError(f"result, frame: expected frame {state.frame}, got {indices}")
+    t_s = (frame.t_ns - int(drive.times_ns[0])) / NS_PER_S
+    text = readout_text(state.frame, len(drive), t_s, frame.speed_mps, frame.yaw_rate_radps)
+    picture = camera_picture(drive, state, result, frame)
+    diff = ""
+    if result_b is not None:
+        picture_b = camera_picture(drive, state, result_b, frame)
+        picture = side_by_side(
+            draw.add_caption(picture, "A | " + text), draw.add_caption(picture_b, "B")
         )
+        diff = diff_markdown(result, result_b)
+    else:
+        picture = draw.add_caption(picture, text)
+    bird_eyes: tuple[tuple[BirdEyeGeometry, draw.RgbImage], ...] = ()
+    if state.panels.bird_eye:
+        bird_eyes = (bird_eye_view(result, state.params),)
+        if result_b is not None and state.params_b is not None:
+            offset = b_offset_y_m(state.params)
+            bird_eyes += (bird_eye_view(result_b, state.params_b, offset),)
+    return FrameView(
+        state.frame, picture, text, result.timings, stage_panels(result, state), diff, bird_eyes
+    )
+
+
+def bird_eye_view(
+    result: FrameResult, params: Params, offset_y_m: float = 0.0
+) -> tuple[BirdEyeGeometry, draw.RgbImage]:
+    """The 3D bird's-eye view of `result`: its geometry and the bird's-eye image as texture."""
+    texture = draw.grey_to_rgb(result.motion_stereo.bird_eye)
+    return bird_eye_geometry(result, params, offset_y_m), texture
+
+
+def b_offset_y_m(params: Params) -> float:
+    """Where set B's bird's-eye view goes: to the right of A's road, `AB_BIRD_EYE_GAP_M`
+    apart."""
+    _, _, y_min_m, y_max_m = panels.bird_eye_extent_m(params.motion_stereo)
+    return -(y_max_m - y_min_m + AB_BIRD_EYE_GAP_M)
+
+
+def camera_picture(
+    drive: FrameSource, state: ViewState, result: FrameResult, frame: FrameInput
+) -> draw.RgbImage:
+    """The camera frame with the layers of `state` drawn from `result`."""
     rgb = draw.grey_to_rgb(frame.image)
     if state.layers.truth:
         rgb = draw.draw_truth(rgb, drive.truth(state.frame))
-    rgb = overlays.draw_layers(rgb, result, overlay_names(state.layers))
-    t_s = (frame.t_ns - int(drive.times_ns[0])) / NS_PER_S
-    text = readout_text(state.frame, len(drive), t_s, frame.speed_mps, frame.yaw_rate_radps)
-    return FrameView(
-        state.frame, draw.add_caption(rgb, text), text, result.timings, stage_panels(result, state)
+    return overlays.draw_layers(rgb, result, overlay_names(state.layers))
+
+
+def side_by_side(a: draw.RgbImage, b: draw.RgbImage) -> draw.RgbImage:
+    """`a`, a white gap of AB_GAP_PX and `b`, left to right (both of one height)."""
+    gap = np.full((a.shape[0], AB_GAP_PX, 3), AB_GAP_COLOUR, dtype=np.uint8)
+    return np.ascontiguousarray(np.hstack([a, gap, b]))
+
+
+def diff_markdown(a: FrameResult, b: FrameResult) -> str:
+    """Markdown: the detections set A has that B lacks, and the reverse."""
+    diff = diff_detections(a, b)
+
+    def listed(title: str, found: Sequence[Detection]) -> str:
+        items = "".join(f"\n- {d.label}" for d in found) if found else "\n- none"
+        return f"**{title}**{items}"
+
+    return "\n\n".join(
+        [
+            listed("A has, B lacks", diff.only_a),
+            listed("B has, A lacks", diff.only_b),
+            f"{diff.matched} detections in both",
+        ]
     )
 
 
@@ -128,11 +226,54 @@ def overlay_names(layers: Layers) -> list[str]:
 
 
 def stage_panels(result: FrameResult, state: ViewState) -> tuple[tuple[str, draw.RgbImage], ...]:
-    """The stage images beside the camera: (tab title, RGB image)."""
+    """The stage images beside the camera that `state.panels` switches on: (tab title, RGB)."""
     threshold = state.params.pedestrian.symmetry_threshold
-    return (
-        ("Motion stereo", panels.motion_stereo_panel(result.motion_stereo)),
-        ("Symmetry", panels.symmetry_panel(result.vehicle.targets)),
-        ("Pedestrians", panels.pedestrian_symmetry_panel(result.pedestrian, threshold)),
-        ("Guard rails", panels.guard_rail_panel(result.guardrail.checks, result.areas)),
+    makers = {
+        "motion_stereo": lambda: panels.motion_stereo_panel(result.motion_stereo),
+        "symmetry": lambda: panels.symmetry_panel(result.vehicle.targets),
+        "pedestrians": lambda: panels.pedestrian_symmetry_panel(result.pedestrian, threshold),
+        "guard_rails": lambda: panels.guard_rail_panel(result.guardrail.checks, result.areas),
+    }
+    return tuple(
+        (PANEL_TITLES[name], make()) for name, make in makers.items() if getattr(state.panels, name)
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class CanSeries:
+    """A drive's CAN signals at its camera frames: seconds from the first frame, speed in
+    km/h and yaw rate in deg/s (NaN where the drive has none)."""
+
+    t_s: npt.NDArray[np.float64]
+    speed_kmh: npt.NDArray[np.float64]
+    yaw_rate_degps: npt.NDArray[np.float64]
+
+
+def can_series(drive: FrameSource) -> CanSeries:
+    times = [int(t) for t in drive.times_ns]
+    return CanSeries(
+        np.array([(t - times[0]) / NS_PER_S for t in times], dtype=np.float64),
+        np.array([drive.speed_at(t) * MPS_TO_KMH for t in times], dtype=np.float64),
+        np.array([math.degrees(drive.yaw_rate_at(t)) for t in times], dtype=np.float64),
+    )
+
+
+def can_window(
+    series: CanSeries, frame: int, half_width_s: float = CAN_WINDOW_HALF_S
+) -> tuple[npt.NDArray[np.float64], ...]:
+    """The CAN plot's data around frame `frame`: (t_s, speed_kmh, yaw_rate_degps, playhead),
+    the frames within `half_width_s` of it; playhead is NaN but at `frame`, where it is the
+    speed, so the plot marks the playhead on the speed curve."""
+    t_now = series.t_s[frame]
+    near = np.flatnonzero(np.abs(series.t_s - t_now) <= half_width_s)
+    playhead = np.where(near == frame, series.speed_kmh[near], np.nan)
+    return series.t_s[near], series.speed_kmh[near], series.yaw_rate_degps[near], playhead
+
+
+def median_timings(timings: Sequence[StageTimings]) -> StageTimings:
+    """Stage by stage, the median of `timings` (at least one)."""
+    if not timings:
+        raise ValueError("timings: expected at least one frame's timings, got none")
+    return StageTimings(
+        *(statistics.median(getattr(t, f.name) for t in timings) for f in fields(StageTimings))
     )

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import textwrap
 import time
@@ -487,6 +488,12 @@ def _cmd_synth(args: argparse.Namespace) -> int:
 
 
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
+# where the inspector keeps parameter presets: the user's data folder, not the project
+DEFAULT_PRESETS = (
+    Path(os.environ.get("XDG_DATA_HOME") or Path.home() / ".local" / "share")
+    / "fusionscope"
+    / "presets"
+)
 
 
 def _cmd_serve(args: argparse.Namespace) -> int:
@@ -508,7 +515,7 @@ def _cmd_serve(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     try:
-        serve(root, args.recording, args.host, args.port)
+        serve(root, args.recording, args.host, args.port, Path(args.presets))
     except ValueError as err:
         print(f"fusionscope serve: {err}", file=sys.stderr)
         return 2
@@ -651,6 +658,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     serve.add_argument("--host", default="127.0.0.1", help="address to bind (default: 127.0.0.1)")
     serve.add_argument("--port", type=int, default=8080, help="port (default: 8080)")
+    serve.add_argument(
+        "--presets",
+        default=str(DEFAULT_PRESETS),
+        help=f"folder the inspector saves parameter presets in (default: {DEFAULT_PRESETS})",
+    )
     serve.set_defaults(func=_cmd_serve)
 
     calibrate = sub.add_parser(

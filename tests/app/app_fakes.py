@@ -14,6 +14,8 @@ from core.io.groundtruth import FrameTruth, TruthGuardRail, TruthObject
 
 WIDTH_PX, HEIGHT_PX = 640, 480
 FRAME_PERIOD_NS = 40_000_000
+SPEED_MPS = 25.0
+YAW_RATE_RADPS = 0.01
 
 
 @dataclass(frozen=True)
@@ -47,6 +49,16 @@ class FakeDrive:
     def __len__(self) -> int:
         return len(self.times_ns)
 
+    @property
+    def has_truth(self) -> bool:
+        return True
+
+    def speed_at(self, t_ns: int) -> float:
+        return SPEED_MPS
+
+    def yaw_rate_at(self, t_ns: int) -> float:
+        return YAW_RATE_RADPS
+
     def frame(self, index: int) -> FrameInput:
         ramp = np.tile(np.linspace(0, 120, WIDTH_PX, dtype=np.float64), (HEIGHT_PX, 1))
         image = (ramp + 10 * index).astype(np.uint8)
@@ -57,8 +69,8 @@ class FakeDrive:
             image,
             (target,),
             self.times_ns[index],
-            speed_mps=25.0,
-            yaw_rate_radps=0.01,
+            speed_mps=SPEED_MPS,
+            yaw_rate_radps=YAW_RATE_RADPS,
         )
 
     def truth(self, index: int) -> FrameTruth | None:

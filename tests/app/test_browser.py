@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import re
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -63,7 +64,8 @@ def page(browser: Browser) -> Iterator[Page]:
 def start(
     root: Path, recording: str | None = None, opener: DriveOpener = open_drive
 ) -> InspectorServer:
-    server = InspectorServer(root, recording, "127.0.0.1", 0, open_drive=opener)
+    presets = Path(tempfile.mkdtemp(prefix="fusionscope-presets-"))
+    server = InspectorServer(root, recording, "127.0.0.1", 0, open_drive=opener, presets=presets)
     server.start()
     return server
 

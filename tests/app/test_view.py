@@ -9,14 +9,19 @@ from app_fakes import HEIGHT_PX, FakeDrive
 
 from app import draw, overlays
 from app.engines import ClientEngines, FrameCache
-from app.state import Layers, ViewState
+from app.state import Layers, Panels, ViewState
 from app.view import (
+    AB_GAP_PX,
     OVERLAY_OF_LAYER,
     FrameView,
+    can_series,
+    can_window,
+    median_timings,
     readout_text,
     render_view,
     timings_markdown,
 )
+from core.engine import StageTimings
 from core.params import Params
 
 
@@ -66,7 +71,7 @@ def test_every_layer_but_truth_is_an_overlay_and_every_stage_has_a_panel() -> No
 def test_a_result_of_another_frame_is_refused() -> None:
     drive = FakeDrive(frames=10)
     result = ClientEngines(drive.camera).result("tab", drive, Params(), 3)
-    with pytest.raises(ValueError, match="expected frame 4, got 3 and 4"):
+    with pytest.raises(ValueError, match=r"expected frame 4, got \(3, 4\)"):
         render_view(drive, ViewState(frame=4), result, drive.frame(4))
 
 
@@ -95,3 +100,56 @@ def test_the_frame_cache_keeps_the_last_frames_read() -> None:
         assert cache.frame(i).index == i
     assert Counting.reads == 5  # 0 again was kept; 1 had been pushed out by 3
     assert len(cache) == 10
+
+
+def test_panels_switched_off_are_not_drawn() -> None:
+    only = Panels(**dict.fromkeys(Panels.names(), False))
+    view = _view(FakeDrive(frames=3), ViewState(frame=2, panels=only))
+    assert view.panels == ()
+    guard_rails = Panels(**{**dict.fromkeys(Panels.names(), False), "guard_rails": True})
+    view = _view(FakeDrive(frames=3), ViewState(frame=2, panels=guard_rails))
+    assert [title for title, _ in view.panels] == ["Guard rails"]
+
+
+def test_comparing_puts_a_and_b_side_by_side_and_lists_the_differences() -> None:
+    drive = FakeDrive(frames=4)
+    engines = ClientEngines(drive.camera)
+    a = engines.result("a", drive, Params(), 3)
+    b = engines.result("b", drive, Params(), 3)
+    alone = render_view(drive, ViewState(frame=3), a, drive.frame(3))
+    both = render_view(drive, ViewState(frame=3, params_b=Params()), a, drive.frame(3), b)
+    height, width = alone.image.shape[:2]
+    assert both.image.shape == (height, 2 * width + AB_GAP_PX, 3)
+    # the same parameters draw the same picture on both sides (captions aside)
+    picture_h = drive.frame(3).image.shape[0]
+    np.testing.assert_array_equal(
+        both.image[:picture_h, :width], both.image[:picture_h, width + AB_GAP_PX :]
+    )
+    assert alone.diff == ""
+    assert "**A has, B lacks**\n- none" in both.diff and "**B has, A lacks**\n- none" in both.diff
+
+
+def test_the_can_window_holds_the_frames_around_the_playhead_and_marks_it() -> None:
+    drive = FakeDrive(frames=300)  # 25 Hz: 12 s
+    series = can_series(drive)
+    assert series.speed_kmh[0] == pytest.approx(90.0)
+    assert series.yaw_rate_degps[0] == pytest.approx(np.degrees(0.01))
+    t, speed, yaw, playhead = can_window(series, 100, half_width_s=1.0)
+    assert t[0] == pytest.approx(3.0) and t[-1] == pytest.approx(5.0) and len(t) == 51
+    assert np.flatnonzero(np.isfinite(playhead)).tolist() == [25]
+    assert playhead[25] == speed[25] and len(yaw) == 51
+    t, *_ = can_window(series, 0, half_width_s=1.0)  # at the start: only what follows
+    assert t[0] == 0.0 and len(t) == 26
+
+
+def test_the_running_median_is_taken_stage_by_stage() -> None:
+    runs = [
+        StageTimings(1, 2, 3, 4, 5, 6),
+        StageTimings(3, 2, 1, 4, 9, 0),
+        StageTimings(2, 2, 2, 2, 2, 2),
+    ]
+    assert median_timings(runs) == StageTimings(2, 2, 2, 4, 5, 2)
+    table = timings_markdown(runs[0], median_timings(runs), 3)
+    assert "| stage | ms | median of 3 |" in table and "| **total** | 21.00 | 17.00 |" in table
+    with pytest.raises(ValueError, match="expected at least one"):
+        median_timings([])
