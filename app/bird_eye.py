@@ -339,17 +339,19 @@ def _tuple3(values: FloatArray) -> tuple[float, float, float]:
     return float(values[0]), float(values[1]), float(values[2])
 
 
-def top_down_view(camera: viser.CameraHandle, params: Params, centre_y_m: float = 0.0) -> None:
+def top_down_view(
+    camera: viser.CameraHandle, params: Params, centre_y_m: float = 0.0, views: int = 1
+) -> None:
     """Point a client's camera from behind and above the ego car at the road ahead, so the
     ego car and the ground texture of `params` fill the view, +z up.
 
-    centre_y_m: the lateral middle of what to show, e.g. halfway between two views drawn
-    side by side.
+    centre_y_m: the lateral middle of what to show; views: how many bird's-eye views stand
+    side by side there (A, and B beside it).
     """
     x_min_m, x_max_m, y_min_m, y_max_m = bird_eye_extent_m(params.motion_stereo)
     near_m = min(x_min_m, EGO_REAR_X_M)
     look_at = np.array([(near_m + x_max_m) / 2, centre_y_m, 0.0])
-    distance_m = VIEW_DISTANCE_FACTOR * max(x_max_m - near_m, y_max_m - y_min_m)
+    distance_m = VIEW_DISTANCE_FACTOR * max(x_max_m - near_m, views * (y_max_m - y_min_m))
     back = np.array([-math.cos(VIEW_ELEVATION_RAD), 0.0, math.sin(VIEW_ELEVATION_RAD)])
     camera.up_direction = UP_DIRECTION
     camera.position = look_at + distance_m * back

@@ -279,7 +279,8 @@ class ClientSession:
             scene.remove()
         if view.bird_eyes and len(view.bird_eyes) != self._views_aimed_at:
             centre_y_m = view.bird_eyes[-1][0].texture_position_m[1] / 2
-            top_down_view(self.client.camera, self._state.params, centre_y_m)
+            views = len(view.bird_eyes)
+            top_down_view(self.client.camera, self._state.params, centre_y_m, views)
         self._views_aimed_at = len(view.bird_eyes)
 
     def _show_panels(self, images: Sequence[tuple[str, RgbImage]]) -> None:

@@ -1,93 +1,27 @@
-"""The inspector in headless Chromium: the camera image shows, stepping shows the next frame.
-
-Needs Debian's chromium at /usr/bin/chromium (Playwright's own browser download is never
-used). Without it the tests skip, except when CI or REQUIRE_BROWSER is set, where they fail.
+"""The inspector in headless Chromium: the camera image shows, stepping shows the next frame,
+play and pause, errors in the page, keys. Fixtures in conftest.py, helpers in browser_page.py.
 """
 
 from __future__ import annotations
 
-import os
 import re
-import tempfile
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from app_fakes import FakeDrive, Recordings
-from playwright.sync_api import Browser, Page, sync_playwright
+from browser_page import CAMERA_IMG, SETTLE_MS, TIMEOUT_MS, camera_src, serving
+from playwright.sync_api import Page
 
-from app.server import DriveOpener, InspectorServer, open_drive
 from core.io import Drive, FrameInput
 from core.io.errors import RecordingError
 
-CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
-SCREENSHOT = Path("/tmp/inspector.png")
-ERROR_SCREENSHOT = Path("/tmp/inspector-error.png")
-TIMEOUT_MS = 30_000
-SETTLE_MS = 1_000  # longer than a seek's replay and render
-
-# The camera image: the one <img> viser fills from a blob with the rendered frame.
-CAMERA_IMG = "img[src^='blob:']"
-
-
-@pytest.fixture(scope="module")
-def browser(recordings: Recordings) -> Iterator[Browser]:
-    """Headless Chromium; after `recordings`, which also compiles the engine first."""
-    if not CHROMIUM.exists():
-        message = f"headless browser tests need Debian chromium at {CHROMIUM}"
-        if os.environ.get("CI") or os.environ.get("REQUIRE_BROWSER"):
-            pytest.fail(message + " (CI / REQUIRE_BROWSER is set)")
-        pytest.skip(message)
-    with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
-        yield browser
-        browser.close()
-
-
-@pytest.fixture()
-def page(browser: Browser) -> Iterator[Page]:
-    context = browser.new_context(viewport={"width": 1400, "height": 800})  # fresh profile
-    yield context.new_page()
-    context.close()
-
-
-def start(
-    root: Path, recording: str | None = None, opener: DriveOpener = open_drive
-) -> InspectorServer:
-    presets = Path(tempfile.mkdtemp(prefix="fusionscope-presets-"))
-    server = InspectorServer(root, recording, "127.0.0.1", 0, open_drive=opener, presets=presets)
-    server.start()
-    return server
-
-
-def camera_src(page: Page) -> str:
-    page.wait_for_function(
-        f'() => {{ const i = document.querySelector("{CAMERA_IMG}");'
-        " return i !== null && i.complete && i.naturalWidth > 0; }",
-        timeout=TIMEOUT_MS,
-    )
-    return page.locator(CAMERA_IMG).get_attribute("src") or ""
-
 
 def test_step_shows_the_next_frame(recordings: Recordings, page: Page) -> None:
-    server = start(recordings.root, recordings.name)
-    try:
-        page.goto(f"http://127.0.0.1:{server.port}/")
+    with serving(page, recordings.root, recordings.name):
         first = camera_src(page)
-        size = page.locator(CAMERA_IMG).evaluate("i => [i.naturalWidth, i.naturalHeight]")
+        size = page.locator(CAMERA_IMG).first.evaluate("i => [i.naturalWidth, i.naturalHeight]")
         assert size[0] == 640 and size[1] > 480  # the frame plus its caption strip
         page.get_by_text("frame 0 /").wait_for(timeout=TIMEOUT_MS)
-        page.screenshot(path=str(SCREENSHOT))
 
         page.get_by_role("button", name="Step +1").click()
         page.get_by_text("frame 1 /").wait_for(timeout=TIMEOUT_MS)
@@ -97,16 +31,12 @@ def test_step_shows_the_next_frame(recordings: Recordings, page: Page) -> None:
             timeout=TIMEOUT_MS,
         )
         assert camera_src(page) != first
-    finally:
-        server.stop()
 
 
 def test_play_runs_to_the_end_and_pause_stops(recordings: Recordings, page: Page) -> None:
     with Drive(recordings.root / recordings.name) as drive:
         last = len(drive) - 1
-    server = start(recordings.root, recordings.name)
-    try:
-        page.goto(f"http://127.0.0.1:{server.port}/")
+    with serving(page, recordings.root, recordings.name):
         camera_src(page)
         readout = page.get_by_text(re.compile(r"^frame \d+ / \d+ \|"))
         page.get_by_role("button", name="Play").click()
@@ -122,8 +52,6 @@ def test_play_runs_to_the_end_and_pause_stops(recordings: Recordings, page: Page
         page.wait_for_timeout(500)
         assert readout.inner_text() == paused_at
         assert not paused_at.startswith(f"frame {last} /")
-    finally:
-        server.stop()
 
 
 def test_recording_that_cannot_open_shows_a_message(tmp_path: Path, page: Page) -> None:
@@ -131,16 +59,11 @@ def test_recording_that_cannot_open_shows_a_message(tmp_path: Path, page: Page) 
     (tmp_path / "broken" / "recording.yaml").write_text("this: [is not a manifest\n")
     with pytest.raises(RecordingError) as err:
         Drive(tmp_path / "broken")
-    server = start(tmp_path)
-    try:
-        page.goto(f"http://127.0.0.1:{server.port}/")
+    with serving(page, tmp_path):
         page.get_by_text("Cannot show this recording").wait_for(timeout=TIMEOUT_MS)
         page.get_by_text(str(err.value).splitlines()[0][-30:]).wait_for(timeout=TIMEOUT_MS)
         assert page.locator(CAMERA_IMG).count() == 0
         assert page.get_by_text("Traceback").count() == 0
-        page.screenshot(path=str(ERROR_SCREENSHOT))
-    finally:
-        server.stop()
 
 
 def test_frame_that_cannot_be_read_is_reported_in_the_readout(tmp_path: Path, page: Page) -> None:
@@ -152,17 +75,13 @@ def test_frame_that_cannot_be_read_is_reported_in_the_readout(tmp_path: Path, pa
 
     (tmp_path / "damaged").mkdir()
     (tmp_path / "damaged" / "recording.yaml").write_text("{}\n")
-    server = start(tmp_path, None, lambda path: DamagedDrive(frames=5, name=path.name))
-    try:
-        page.goto(f"http://127.0.0.1:{server.port}/")
+    with serving(page, tmp_path, None, lambda path: DamagedDrive(frames=5, name=path.name)):
         camera_src(page)
         page.get_by_role("button", name="Step +1").click()
         page.get_by_text("frame 1 cannot be read").wait_for(timeout=TIMEOUT_MS)
         page.get_by_text("image is not a PNG").wait_for(timeout=TIMEOUT_MS)
         page.get_by_role("button", name="Step +1").click()
         page.get_by_text("frame 2 /").wait_for(timeout=TIMEOUT_MS)
-    finally:
-        server.stop()
 
 
 def test_assumptions_and_reading_warnings_are_listed_under_the_name(
@@ -178,22 +97,16 @@ def test_assumptions_and_reading_warnings_are_listed_under_the_name(
 
     (tmp_path / "noted").mkdir()
     (tmp_path / "noted" / "recording.yaml").write_text("{}\n")
-    server = start(tmp_path, None, noted)
-    try:
-        page.goto(f"http://127.0.0.1:{server.port}/")
+    with serving(page, tmp_path, None, noted):
         camera_src(page)
         page.get_by_text("speed 27 m/s is assumed, not measured").wait_for(timeout=TIMEOUT_MS)
         page.get_by_text("skipped 3 lines that are not frames").wait_for(timeout=TIMEOUT_MS)
-    finally:
-        server.stop()
 
 
 def test_keys_step_the_frame_and_the_keys_panel_lists_them(
     recordings: Recordings, page: Page
 ) -> None:
-    server = start(recordings.root, recordings.name)
-    try:
-        page.goto(f"http://127.0.0.1:{server.port}/")
+    with serving(page, recordings.root, recordings.name):
         camera_src(page)
         page.get_by_text("frame 0 /").wait_for(timeout=TIMEOUT_MS)
         page.locator("body").click(position={"x": 700, "y": 700})  # focus off the controls
@@ -203,5 +116,3 @@ def test_keys_step_the_frame_and_the_keys_panel_lists_them(
         page.get_by_text("frame 0 /").wait_for(timeout=TIMEOUT_MS)
         page.get_by_text("Keys").click()
         page.get_by_text("Toggle layer: search areas").wait_for(timeout=TIMEOUT_MS)
-    finally:
-        server.stop()

@@ -22,6 +22,7 @@ from app.view import (
     timings_markdown,
 )
 from core.engine import StageTimings
+from core.io.frame import FrameInput
 from core.params import Params
 
 
@@ -91,7 +92,7 @@ def test_the_frame_cache_keeps_the_last_frames_read() -> None:
     class Counting(FakeDrive):
         reads = 0
 
-        def frame(self, index: int):  # type: ignore[no-untyped-def]
+        def frame(self, index: int) -> FrameInput:
             Counting.reads += 1
             return super().frame(index)
 

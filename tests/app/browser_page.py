@@ -1,0 +1,114 @@
+"""Driving the inspector in headless Debian Chromium: the browser and page fixtures live in
+conftest.py; these are the helpers the browser tests share.
+
+Needs Debian's chromium at /usr/bin/chromium (Playwright's own browser download is never
+used). Without it the tests skip, except when CI or REQUIRE_BROWSER is set, where they fail.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+from playwright.sync_api import Locator, Page
+
+from app.server import DriveOpener, InspectorServer, open_drive
+
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+SCREENSHOTS = Path(tempfile.gettempdir()) / "fusionscope-browser-tests"
+TIMEOUT_MS = 30_000
+SETTLE_MS = 1_000  # longer than a seek's replay and render
+
+# The camera image: the first <img> viser fills from a blob with a rendered picture.
+CAMERA_IMG = "img[src^='blob:']"
+# Whatever rendered picture is on screen (the camera, or the stage panel of the open tab).
+VISIBLE_IMG = "img[src^='blob:']:visible"
+
+
+def start(
+    root: Path, recording: str | None = None, opener: DriveOpener = open_drive
+) -> InspectorServer:
+    presets = Path(tempfile.mkdtemp(prefix="fusionscope-presets-"))
+    server = InspectorServer(root, recording, "127.0.0.1", 0, open_drive=opener, presets=presets)
+    server.start()
+    return server
+
+
+@contextlib.contextmanager
+def serving(
+    page: Page, root: Path, recording: str | None = None, opener: DriveOpener = open_drive
+) -> Iterator[InspectorServer]:
+    """An inspector on `root`, opened in `page`; on leaving, the page is saved to
+    SCREENSHOTS/<test>.png while the server still runs, then the server stops."""
+    server = start(root, recording, opener)
+    try:
+        page.goto(f"http://127.0.0.1:{server.port}/")
+        yield server
+    finally:
+        test = os.environ.get("PYTEST_CURRENT_TEST", "page").split("::")[-1].split(" ")[0]
+        SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+        with contextlib.suppress(Exception):  # a page that is gone must not hide the failure
+            page.screenshot(path=str(SCREENSHOTS / f"{test}.png"))
+        server.stop()
+
+
+def camera_src(page: Page) -> str:
+    page.wait_for_function(
+        f'() => {{ const i = document.querySelector("{CAMERA_IMG}");'
+        " return i !== null && i.complete && i.naturalWidth > 0; }",
+        timeout=TIMEOUT_MS,
+    )
+    return page.locator(CAMERA_IMG).first.get_attribute("src") or ""
+
+
+def pixels(image: Locator) -> str:
+    """A digest of the decoded pixels of an <img>, to tell pictures apart (not their URLs)."""
+    image.evaluate("i => i.decode()")
+    return str(
+        image.evaluate(
+            """i => { const c = document.createElement('canvas');
+                c.width = i.naturalWidth; c.height = i.naturalHeight;
+                const g = c.getContext('2d'); g.drawImage(i, 0, 0);
+                const d = g.getImageData(0, 0, c.width, c.height).data;
+                let h = 0; for (let k = 0; k < d.length; k += 7) h = (h * 31 + d[k]) >>> 0;
+                return `${c.width}x${c.height}:${h}`; }"""
+        )
+    )
+
+
+def changed_pixels(page: Page, selector: str, before: str) -> str:
+    """Wait until the first <img> matching `selector` shows other pixels than `before`."""
+    for _ in range(TIMEOUT_MS // 100):
+        now = pixels(page.locator(selector).first)
+        if now != before:
+            return now
+        page.wait_for_timeout(100)
+    raise AssertionError(f"{selector}: the picture did not change in {TIMEOUT_MS} ms")
+
+
+def field(page: Page, label: str) -> Locator:
+    """The visible input of the control labelled `label` (a parameter's field once its
+    folder is open). viser's text fields do not tie their label to the input, so the input
+    is found beside the label rather than by `get_by_label`."""
+    row = page.locator("label").filter(has_text=label).filter(visible=True)
+    exact = row.locator(f"xpath=self::*[normalize-space(.)='{label}']")
+    return exact.locator("xpath=ancestor::div[.//input][1]//input").first
+
+
+def set_field(page: Page, label: str, value: str) -> None:
+    box = field(page, label)
+    box.fill(value)
+    box.press("Enter")
