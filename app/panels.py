@@ -64,7 +64,7 @@ START_COLOUR: Rgb = (0, 220, 0)  # green: where a followed line starts
 EDGE_GREY = 110  # grey level of edge pixels under a followed line
 
 SEPARATOR_PX = 2
-MOTION_TILE_HW_PX = (300, 300)
+EMPTY_PANEL_HW_PX = (300, 300)
 SYMMETRY_TILE_HW_PX = (208, 272)
 MATRIX_ROW_PX = 2  # picture rows per half-width of a symmetry matrix
 GUARD_RAIL_TILE_HW_PX = (112, 352)
@@ -85,7 +85,7 @@ def _require_size(name: str, size_hw_px: tuple[int, int]) -> None:
         raise ValueError(f"{name}: expected (height, width) >= 1 pixel, got {size_hw_px!r}")
 
 
-def empty_panel(text: str, size_hw_px: tuple[int, int] = MOTION_TILE_HW_PX) -> RgbImage:
+def empty_panel(text: str, size_hw_px: tuple[int, int] = EMPTY_PANEL_HW_PX) -> RgbImage:
     """(height, width, 3) `BACKGROUND_COLOUR` picture with `text` centred in
     `EMPTY_TEXT_COLOUR`: what a panel shows when it has nothing to show."""
     _require_size("size_hw_px", size_hw_px)
@@ -162,26 +162,34 @@ def _captioned_tile(rgb: RgbImage, caption: str, tile_hw_px: tuple[int, int]) ->
 
 
 def motion_stereo_panel(
-    ms: MotionStereoResult, tile_hw_px: tuple[int, int] = MOTION_TILE_HW_PX
+    ms: MotionStereoResult, tile_hw_px: tuple[int, int] | None = None
 ) -> RgbImage:
-    """A, the warped background B, C = |A - B|, D and D reprojected into the image, side by
-    side: one row of five captioned tiles, each (tile_h + STRIP_HEIGHT_PX, tile_w), with a
-    caption naming the mode below.
+    """A, the warped background B, C = |A - B| and D side by side, each a captioned tile
+    (tile_h + STRIP_HEIGHT_PX, tile_w) (default: the bird's-eye image's own size, so its
+    cells stay sharp), and D reprojected into the image below them, as wide as that row;
+    a caption naming the mode at the bottom.
 
     The bird's-eye images keep the grid's orientation (row 0 the farthest: far is up); the
     grey levels are the stage's own (C is not stretched).
-    Shape: (tile_h + 2 STRIP_HEIGHT_PX, 5 tile_w + 4 SEPARATOR_PX, 3).
+    Shape: (tile_h + mask_h + 3 STRIP_HEIGHT_PX + SEPARATOR_PX, 4 tile_w + 3 SEPARATOR_PX, 3),
+    mask_h the reprojected mask's height scaled to that width.
     """
+    tile_hw_px = tile_hw_px or ms.bird_eye.shape[:2]
     _require_size("tile_hw_px", tile_hw_px)
     images = (
         (ms.bird_eye, "A bird's eye"),
         (ms.background, "B moved"),
         (ms.difference, "C = |A - B|"),
         (ms.obstacles, "D = m > xi"),
-        (ms.image_mask, "D in the image"),
     )
     tiles = [_captioned_tile(grey_to_rgb(img), text, tile_hw_px) for img, text in images]
-    return add_caption(contact_sheet(tiles, len(tiles)), f"motion stereo: {ms.mode}")
+    row = contact_sheet(tiles, len(tiles))
+    width = row.shape[1]
+    mask_h, mask_w = ms.image_mask.shape[:2]
+    mask_tile_hw = (max(1, round(mask_h * width / mask_w)), width)
+    mask = _captioned_tile(grey_to_rgb(ms.image_mask), "D in the image", mask_tile_hw)
+    gap = np.full((SEPARATOR_PX, width, 3), BACKGROUND_COLOUR, dtype=np.uint8)
+    return add_caption(np.vstack([row, gap, mask]), f"motion stereo: {ms.mode}")
 
 
 # --- symmetry matrices (paper 001, fig. 3) --------------------------------------------------

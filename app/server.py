@@ -21,13 +21,16 @@ import viser
 
 from app.catalog import list_recordings, resolve_recording
 from app.engines import ClientEngines, FrameCache
+from app.metrics_panel import Evaluate
 from app.presets import PresetStore
 from app.session import ClientSession
 from app.state import ViewState
 from app.view import CanSeries, FrameSource, FrameView, can_series, render_view
 from app.worker import RenderWorker
+from core.evaluation.evaluate import RecordingReport, evaluate_recording
 from core.io import Drive
 from core.io.errors import RecordingError
+from core.params import Params
 
 log = logging.getLogger(__name__)
 
@@ -45,7 +48,8 @@ class _OpenDrive:
     drive: FrameSource
     engines: ClientEngines
     worker: RenderWorker[int, ViewState, FrameView | Exception]
-    can: CanSeries
+    can: CanSeries | None
+    evaluate: Evaluate | None  # the whole drive scored under some parameters; None: no truth
 
 
 class InspectorServer:
@@ -157,6 +161,7 @@ class InspectorServer:
             lambda state: entry.worker.submit(client_id, state),
             entry.drive.notes,
             entry.can,
+            entry.evaluate,
         )
 
     # --- drives -------------------------------------------------------------------------
@@ -196,7 +201,15 @@ class InspectorServer:
                     session.show_view(name, view)
 
             worker = RenderWorker(render, publish, name=f"render-{name}")
-            entry = _OpenDrive(drive, engines, worker, can_series(drive))
+            evaluate = None
+            if drive.has_truth:
+
+                def evaluate(
+                    params: Params, progress: Callable[[int, int], None]
+                ) -> RecordingReport:
+                    return evaluate_recording(drive.path, params, progress, timing=False)
+
+            entry = _OpenDrive(drive, engines, worker, can_series(drive), evaluate)
             self._drives[name] = entry
             return entry
 

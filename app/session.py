@@ -20,6 +20,8 @@ import viser.uplot
 from app.bird_eye import BirdEyeScene, top_down_view
 from app.draw import RgbImage
 from app.history import History
+from app.metrics import SliderMark
+from app.metrics_panel import Evaluate, MetricsPanel
 from app.param_sets import ParamSets, Sets
 from app.params_panel import NoticeColour, ParamsPanel
 from app.presets import PresetStore
@@ -137,6 +139,7 @@ class ClientSession:
         self._timings: viser.GuiMarkdownHandle | None = None
         self._panel_tabs: dict[str, viser.GuiTabHandle] = {}
         self._panel_images: dict[str, viser.GuiImageHandle] = {}
+        self._metrics: MetricsPanel | None = None
         self._bird_eyes = (
             BirdEyeScene(client.scene, "/bird_eye_a"),
             BirdEyeScene(client.scene, "/bird_eye_b"),
@@ -162,11 +165,13 @@ class ClientSession:
         request: Callable[[ViewState], None],
         notes: Sequence[str] = (),
         can: CanSeries | None = None,
+        evaluate: Evaluate | None = None,
     ) -> None:
         """Build the timeline for a drive of `frame_count` frames and render its first frame.
 
         notes: what the viewer should know about the recording (assumptions, what was skipped
-        on reading), listed under its name. can: its CAN signals for the plot.
+        on reading), listed under its name. can: its CAN signals for the plot. evaluate:
+        scores the whole drive under some parameters (None: the drive has no ground truth).
         """
         self._drop_drive()
         gui = self.client.gui
@@ -203,6 +208,15 @@ class ClientSession:
             )
         )
         self._slider.on_update(lambda event: self.go_to(event.target.value))
+        self._metrics = MetricsPanel(
+            gui,
+            6,
+            evaluate,
+            lambda: self._state.params,
+            self._set_marks,
+            self.go_to,
+            lambda: self._state.frame,
+        )
         self._play.on_click(lambda _: self.set_playing(not self._state.playing))
         step_back.on_click(lambda _: self.step(-1))
         step_on.on_click(lambda _: self.step(+1))
@@ -235,9 +249,8 @@ class ClientSession:
             self._readout.content = f"`{view.readout}`"
 
     def _show_can(self, frame: int) -> None:
-        """The CAN plot around `frame` (removed when switched off or without CAN)."""
-        wanted = self._state.panels.can and self._can is not None
-        if not wanted or self._can is None:
+        """The CAN plot around `frame` (removed when switched off; none without CAN)."""
+        if not self._state.panels.can or self._can is None:
             if self._can_plot is not None:
                 self._can_plot.remove()
                 self._can_plot = None
@@ -246,24 +259,23 @@ class ClientSession:
         if self._can_plot is not None:
             self._can_plot.data = data
             return
+        half = CAN_WINDOW_HALF_S
         with self._camera_tab:
             self._can_plot = self.client.gui.add_uplot(
                 data,
                 (
-                    viser.uplot.Series(label="t s"),
+                    viser.uplot.Series(label="s from the playhead"),
                     viser.uplot.Series(label="speed km/h", stroke="#1f77b4", width=2, scale="kmh"),
                     viser.uplot.Series(label="yaw deg/s", stroke="#d62728", width=2, scale="degps"),
-                    viser.uplot.Series(
-                        label="playhead",
-                        stroke="#000000",
-                        scale="kmh",
-                        points={"show": True, "size": 10, "fill": "#000000"},
-                    ),
                 ),
-                title=f"CAN around the playhead (±{CAN_WINDOW_HALF_S:g} s)",
-                scales={"x": {"time": False}, "kmh": {"auto": True}, "degps": {"auto": True}},
+                title="CAN speed and yaw rate; the playhead is at 0 s",
+                scales={
+                    "x": {"time": False, "range": (-half, half)},
+                    "kmh": {"auto": True},
+                    "degps": {"auto": True},
+                },
                 axes=(
-                    {"label": "t s"},
+                    {"label": "s from the playhead"},
                     {"scale": "kmh", "label": "km/h"},
                     {"scale": "degps", "label": "deg/s", "side": 1},
                 ),
@@ -438,6 +450,26 @@ class ClientSession:
         self._params_panel.show(sets)
         self._submit()
 
+    def _set_marks(self, marks: tuple[SliderMark, ...]) -> None:
+        """Marks under the frame slider (viser sets a slider's marks when it is made, so the
+        slider is made again in the same place)."""
+        with self._lock:
+            old, timeline = self._slider, self._timeline
+            if old is None or timeline is None:
+                return
+            with timeline:
+                self._slider = self.client.gui.add_slider(
+                    "frame",
+                    0,
+                    self._frame_count - 1,
+                    1,
+                    self._state.frame,
+                    marks=marks,
+                    order=old.order,
+                )
+            self._slider.on_update(lambda event: self.go_to(event.target.value))
+            old.remove()
+
     def _set_panels(self) -> None:
         panels = Panels(**{name: box.value for name, box in self._panel_boxes.items()})
         with self._lock:
@@ -464,6 +496,9 @@ class ClientSession:
             self._frame_count = 0
         if self._timeline is not None:
             self._timeline.remove()
+        if self._metrics is not None:
+            self._metrics.remove()
+            self._metrics = None
         for handle in (self._image, self._diff, self._can_plot, self._timings):
             if handle is not None:
                 handle.remove()

@@ -249,25 +249,27 @@ class CanSeries:
     yaw_rate_degps: npt.NDArray[np.float64]
 
 
-def can_series(drive: FrameSource) -> CanSeries:
+def can_series(drive: FrameSource) -> CanSeries | None:
+    """The drive's CAN signals at its frames; None when it has neither speed nor yaw rate
+    (not measured, nothing assumed)."""
     times = [int(t) for t in drive.times_ns]
-    return CanSeries(
+    series = CanSeries(
         np.array([(t - times[0]) / NS_PER_S for t in times], dtype=np.float64),
         np.array([drive.speed_at(t) * MPS_TO_KMH for t in times], dtype=np.float64),
         np.array([math.degrees(drive.yaw_rate_at(t)) for t in times], dtype=np.float64),
     )
+    known = np.isfinite(series.speed_kmh).any() or np.isfinite(series.yaw_rate_degps).any()
+    return series if known else None
 
 
 def can_window(
     series: CanSeries, frame: int, half_width_s: float = CAN_WINDOW_HALF_S
 ) -> tuple[npt.NDArray[np.float64], ...]:
-    """The CAN plot's data around frame `frame`: (t_s, speed_kmh, yaw_rate_degps, playhead),
-    the frames within `half_width_s` of it; playhead is NaN but at `frame`, where it is the
-    speed, so the plot marks the playhead on the speed curve."""
+    """The CAN plot's data around frame `frame`: (seconds from the playhead, speed_kmh,
+    yaw_rate_degps) of the frames within `half_width_s` of it, so the playhead is at 0."""
     t_now = series.t_s[frame]
     near = np.flatnonzero(np.abs(series.t_s - t_now) <= half_width_s)
-    playhead = np.where(near == frame, series.speed_kmh[near], np.nan)
-    return series.t_s[near], series.speed_kmh[near], series.yaw_rate_degps[near], playhead
+    return series.t_s[near] - t_now, series.speed_kmh[near], series.yaw_rate_degps[near]
 
 
 def median_timings(timings: Sequence[StageTimings]) -> StageTimings:

@@ -21,7 +21,10 @@ from browser_page import (
 )
 from playwright.sync_api import Page, expect
 
+from app.metrics import error_marks
 from app.view import AB_GAP_PX
+from core.evaluation.evaluate import evaluate_recording
+from core.params import Params
 
 XI = "threshold_xi"  # motion stereo's binarisation threshold (grey levels)
 
@@ -131,3 +134,24 @@ def test_a_recording_that_cannot_open_leaves_the_page_working(
         camera_src(page)
         page.get_by_text("frame 0 /").wait_for(timeout=TIMEOUT_MS)
         assert page.get_by_text("Traceback").count() == 0
+
+
+def test_the_metrics_mark_errors_on_the_timeline_and_jump_there(
+    recordings: Recordings, page: Page
+) -> None:
+    with serving(page, recordings.root, recordings.name) as server:
+        camera_src(page)
+        open_folders(page, "Metrics")
+        page.get_by_role("button", name="Evaluate the drive under A").click()
+        page.get_by_text("Vehicles, frame by frame").wait_for(timeout=TIMEOUT_MS)
+        report = evaluate_recording(
+            server.recordings_root / recordings.name, Params(), timing=False
+        )
+        marks = error_marks(report, ("vehicle FN",))
+        later = [m.frame for m in marks if m.frame > 0]
+        assert later, "the synthetic drive should have a vehicle FN after frame 0 to jump to"
+        page.get_by_role("button", name="Next").click()
+        page.get_by_text(f"frame {later[0]} /").wait_for(timeout=TIMEOUT_MS)
+        page.get_by_label("jump to", exact=True).click()
+        page.get_by_role("option", name=marks[-1].text).click()
+        page.get_by_text(f"frame {marks[-1].frame} /").wait_for(timeout=TIMEOUT_MS)

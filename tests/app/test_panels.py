@@ -137,9 +137,17 @@ def test_contact_sheet_refuses_bad_tiles() -> None:
 # --- motion stereo --------------------------------------------------------------------------
 
 
-def test_motion_stereo_panel_is_one_row_of_five_tiles() -> None:
-    out = panels.motion_stereo_panel(engine_result().motion_stereo, (120, 100))
-    assert out.shape == (120 + 2 * STRIP, 5 * 100 + 4 * SEP, 3)
+def test_motion_stereo_panel_is_a_row_of_four_bird_eye_tiles_over_the_image_mask() -> None:
+    ms = engine_result().motion_stereo
+    out = panels.motion_stereo_panel(ms, (120, 100))
+    width = 4 * 100 + 3 * SEP
+    mask_h, mask_w = ms.image_mask.shape
+    mask_rows = round(mask_h * width / mask_w)
+    assert out.shape == (120 + STRIP + SEP + mask_rows + STRIP + STRIP, width, 3)
+    rows, cols = ms.bird_eye.shape
+    default = panels.motion_stereo_panel(ms)  # tiles of the bird's-eye image's own size
+    assert default.shape[1] == 4 * cols + 3 * SEP
+    np.testing.assert_array_equal(default[:rows, :cols], draw.grey_to_rgb(ms.bird_eye))
 
 
 def test_bird_eye_tiles_show_far_up() -> None:

@@ -130,17 +130,28 @@ def test_comparing_puts_a_and_b_side_by_side_and_lists_the_differences() -> None
     assert "**A has, B lacks**\n- none" in both.diff and "**B has, A lacks**\n- none" in both.diff
 
 
-def test_the_can_window_holds_the_frames_around_the_playhead_and_marks_it() -> None:
+def test_the_can_window_holds_the_frames_around_the_playhead_at_zero() -> None:
     drive = FakeDrive(frames=300)  # 25 Hz: 12 s
     series = can_series(drive)
+    assert series is not None
     assert series.speed_kmh[0] == pytest.approx(90.0)
     assert series.yaw_rate_degps[0] == pytest.approx(np.degrees(0.01))
-    t, speed, yaw, playhead = can_window(series, 100, half_width_s=1.0)
-    assert t[0] == pytest.approx(3.0) and t[-1] == pytest.approx(5.0) and len(t) == 51
-    assert np.flatnonzero(np.isfinite(playhead)).tolist() == [25]
-    assert playhead[25] == speed[25] and len(yaw) == 51
-    t, *_ = can_window(series, 0, half_width_s=1.0)  # at the start: only what follows
-    assert t[0] == 0.0 and len(t) == 26
+    dt, speed, yaw = can_window(series, 100, half_width_s=1.0)
+    assert dt[0] == pytest.approx(-1.0) and dt[-1] == pytest.approx(1.0) and len(dt) == 51
+    assert dt[25] == 0.0 and len(speed) == len(yaw) == 51
+    dt, *_ = can_window(series, 0, half_width_s=1.0)  # at the start: only what follows
+    assert dt[0] == 0.0 and len(dt) == 26
+
+
+def test_a_drive_without_speed_or_yaw_rate_has_no_can_plot() -> None:
+    class Silent(FakeDrive):
+        def speed_at(self, t_ns: int) -> float:
+            return float("nan")
+
+        def yaw_rate_at(self, t_ns: int) -> float:
+            return float("nan")
+
+    assert can_series(Silent(frames=3)) is None
 
 
 def test_the_running_median_is_taken_stage_by_stage() -> None:
