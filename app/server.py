@@ -27,6 +27,7 @@ from app.session import ClientSession
 from app.state import ViewState
 from app.view import CanSeries, FrameSource, FrameView, can_series, render_view
 from app.worker import RenderWorker
+from core.engine import FusionEngine
 from core.evaluation.evaluate import RecordingReport, evaluate_recording
 from core.io import Drive
 from core.io.errors import RecordingError
@@ -99,7 +100,21 @@ class InspectorServer:
         server.on_client_connect(self._connect)
         server.on_client_disconnect(self._disconnect)
         self._server = server
+        threading.Thread(target=self._warm_up, name="warm-up", daemon=True).start()
         return server.get_port()
+
+    def _warm_up(self) -> None:
+        """Open the first recording and run the engine on its first frames, so the first
+        client does not wait for the drive's index or the engine's compiled code (numba
+        compiles on first use after an install). A failure here is left to the client who
+        opens the drive to see."""
+        if self.default_recording is None:
+            return
+        try:
+            drive = self._drive(self.default_recording).drive
+            FusionEngine(Params(), drive.camera).seek(drive, min(1, len(drive) - 1))
+        except Exception:
+            log.debug("warm-up of %s failed", self.default_recording, exc_info=True)
 
     def stop(self) -> None:
         """Stop playback, workers, drives and the web server."""
