@@ -18,7 +18,6 @@ import viser
 import viser.uplot
 
 from app.bird_eye import BirdEyeScene, top_down_view
-from app.draw import RgbImage
 from app.history import History
 from app.metrics import SliderMark
 from app.metrics_panel import Evaluate, MetricsPanel
@@ -29,7 +28,7 @@ from app.state import Layers, Panels, ViewState
 from app.view import (
     CAN_WINDOW_HALF_S,
     OVERLAY_OF_LAYER,
-    PANEL_TITLES,
+    STAGE_TITLES,
     CanSeries,
     FrameView,
     can_window,
@@ -45,11 +44,9 @@ MARKDOWN_SPECIALS = "\\`*_{}[]<>()#+-.!|~"
 PLAYBACK_RATES = ("0.25x", "0.5x", "1x", "2x", "4x")  # of the drive's own frame rate
 # the layers' checkbox labels: the overlays' own names
 LAYER_LABELS = {**OVERLAY_OF_LAYER, "truth": "ground truth"}
-PANEL_LABELS = {
-    "bird_eye": "bird's-eye view (3D)",
-    **{name: title.lower() for name, title in PANEL_TITLES.items()},
-    "can": "CAN speed and yaw rate",
-}
+PANEL_LABELS = {"bird_eye": "bird's-eye view (3D)", "can": "CAN speed and yaw rate"}
+# the right-hand panel, top to bottom
+CAMERA_ORDER, DIFF_ORDER, CAN_ORDER, STAGE_CHOICE_ORDER, STAGE_ORDER = range(5)
 TIMINGS_WINDOW = 50  # frames in the running median of the stage timings
 NOTICE_SECONDS = 8.0
 
@@ -120,7 +117,7 @@ class ClientSession:
         with gui.add_folder("Panels", order=4, expand_by_default=False):
             self._panel_boxes = {
                 name: gui.add_checkbox(PANEL_LABELS[name], getattr(self._state.panels, name))
-                for name in Panels.names()
+                for name in Panels.switches()
             }
         for box in self._panel_boxes.values():
             box.on_update(lambda _: self._set_panels())
@@ -130,15 +127,22 @@ class ClientSession:
         gui.main_panel.dock_left()
         self._camera_panel = gui.add_panel()
         self._camera_tab = self._camera_panel.add_tab("Camera")
-        self._timings_tab = self._camera_panel.add_tab("Timings")
+        with self._camera_tab:
+            self._stage_choice = gui.add_dropdown(
+                "stage",
+                tuple(STAGE_TITLES.values()),
+                initial_value=STAGE_TITLES[self._state.panels.stage],
+                hint="the stage picture under the camera (only what is shown is drawn)",
+                order=STAGE_CHOICE_ORDER,
+            )
+        self._stage_choice.on_update(lambda _: self._set_panels())
         self._camera_panel.dock_right()
         self._camera_panel.set_width(CAMERA_PANEL_WIDTH_PX)
         self._image: viser.GuiImageHandle | None = None
         self._diff: viser.GuiMarkdownHandle | None = None
         self._can_plot: viser.GuiUplotHandle | None = None
         self._timings: viser.GuiMarkdownHandle | None = None
-        self._panel_tabs: dict[str, viser.GuiTabHandle] = {}
-        self._panel_images: dict[str, viser.GuiImageHandle] = {}
+        self._stage_image: viser.GuiImageHandle | None = None
         self._metrics: MetricsPanel | None = None
         self._bird_eyes = (
             BirdEyeScene(client.scene, "/bird_eye_a"),
@@ -231,21 +235,15 @@ class ClientSession:
         with self.client.atomic():
             if self._image is None:
                 with self._camera_tab:
-                    self._image = gui.add_image(view.image, format="jpeg")
-                    self._diff = gui.add_markdown("")
-                with self._timings_tab:
-                    self._timings = gui.add_markdown("")
+                    self._image = gui.add_image(view.image, format="jpeg", order=CAMERA_ORDER)
+                    self._diff = gui.add_markdown("", order=DIFF_ORDER)
             else:
                 self._image.image = view.image
             if self._diff is not None:
                 self._diff.content = view.diff
             self._show_can(view.frame)
-            self._show_panels(view.panels)
+            self._show_stage(view)
             self._show_bird_eyes(view)
-            if self._timings is not None:
-                median = median_timings(self._recent_timings)
-                frames = len(self._recent_timings)
-                self._timings.content = timings_markdown(view.timings, median, frames)
             self._readout.content = f"`{view.readout}`"
 
     def _show_can(self, frame: int) -> None:
@@ -280,6 +278,7 @@ class ClientSession:
                     {"scale": "degps", "label": "deg/s", "side": 1},
                 ),
                 aspect=3.0,
+                order=CAN_ORDER,
             )
 
     def _show_bird_eyes(self, view: FrameView) -> None:
@@ -295,20 +294,30 @@ class ClientSession:
             top_down_view(self.client.camera, self._state.params, centre_y_m, views)
         self._views_aimed_at = len(view.bird_eyes)
 
-    def _show_panels(self, images: Sequence[tuple[str, RgbImage]]) -> None:
-        """The stage panels' tabs: new images in place, a tab per panel switched on."""
+    def _show_stage(self, view: FrameView) -> None:
+        """The stage picture chosen (or the timings table) under the camera."""
         gui = self.client.gui
-        shown = {title for title, _ in images}
-        for title in [t for t in self._panel_tabs if t not in shown]:
-            self._panel_tabs.pop(title).remove()
-            self._panel_images.pop(title, None)
-        for title, image in images:
-            if title in self._panel_images:
-                self._panel_images[title].image = image
+        if view.panels:
+            _, image = view.panels[0]
+            if self._stage_image is None:
+                with self._camera_tab:
+                    self._stage_image = gui.add_image(image, format="jpeg", order=STAGE_ORDER)
             else:
-                self._panel_tabs[title] = tab = self._camera_panel.add_tab(title)
-                with tab:
-                    self._panel_images[title] = gui.add_image(image, format="jpeg")
+                self._stage_image.image = image
+        elif self._stage_image is not None:
+            self._stage_image.remove()
+            self._stage_image = None
+        if self._state.panels.stage == "timings":
+            median = median_timings(self._recent_timings)
+            table = timings_markdown(view.timings, median, len(self._recent_timings))
+            if self._timings is None:
+                with self._camera_tab:
+                    self._timings = gui.add_markdown(table, order=STAGE_ORDER)
+            else:
+                self._timings.content = table
+        elif self._timings is not None:
+            self._timings.remove()
+            self._timings = None
 
     def show_frame_error(self, recording: str, frame: int, what: str, message: str) -> None:
         """Say in the read-out what went wrong with `frame` (the image keeps the last frame)."""
@@ -471,7 +480,9 @@ class ClientSession:
             old.remove()
 
     def _set_panels(self) -> None:
-        panels = Panels(**{name: box.value for name, box in self._panel_boxes.items()})
+        stage = next(k for k, title in STAGE_TITLES.items() if title == self._stage_choice.value)
+        switches = {name: box.value for name, box in self._panel_boxes.items()}
+        panels = Panels(**switches, stage=stage)
         with self._lock:
             self._state = replace(self._state, panels=panels)
         self._submit()
@@ -499,14 +510,12 @@ class ClientSession:
         if self._metrics is not None:
             self._metrics.remove()
             self._metrics = None
-        for handle in (self._image, self._diff, self._can_plot, self._timings):
+        for handle in (self._image, self._diff, self._can_plot, self._timings, self._stage_image):
             if handle is not None:
                 handle.remove()
-        for tab in self._panel_tabs.values():
-            tab.remove()
         for scene in self._bird_eyes:
             scene.remove()
         self._views_aimed_at = 0
-        self._panel_tabs, self._panel_images = {}, {}
+        self._stage_image = None
         self._timeline = self._slider = self._play = self._readout = self._image = None
         self._timings = self._rate = self._diff = self._can_plot = None

@@ -32,20 +32,26 @@ class Layers:
         return tuple(f.name for f in fields(Layers))
 
 
+# the stage pictures under the camera, one at a time ("timings" is a table, "none" nothing)
+STAGES = ("motion_stereo", "symmetry", "pedestrians", "guard_rails", "timings", "none")
+
+
 @dataclass(frozen=True)
 class Panels:
-    """Which pictures beside the camera are drawn (a panel switched off costs nothing)."""
+    """What is drawn beside the camera: only what is shown is drawn."""
 
     bird_eye: bool = True  # the bird's-eye view in the 3D scene
-    motion_stereo: bool = True  # A, warped B, C, D and the reprojected mask
-    symmetry: bool = True  # one symmetry matrix per searched radar target
-    pedestrians: bool = True  # the pedestrian symmetry over the strip
-    guard_rails: bool = True  # the guard-rail edge images
     can: bool = True  # CAN speed and yaw rate around the playhead
+    stage: str = "motion_stereo"  # the one stage picture under the camera, of STAGES
+
+    def __post_init__(self) -> None:
+        if self.stage not in STAGES:
+            raise ValueError(f"stage: expected one of {', '.join(STAGES)}, got {self.stage!r}")
 
     @staticmethod
-    def names() -> tuple[str, ...]:
-        return tuple(f.name for f in fields(Panels))
+    def switches() -> tuple[str, ...]:
+        """The on/off panels."""
+        return tuple(f.name for f in fields(Panels) if f.type in ("bool", bool))
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,5 @@
 """One rendered frame for one client: the camera image with the engine's overlays (A and B
-side by side when comparing), the stage panels switched on, the list of detections A and B
+side by side when comparing), the stage picture shown, the list of detections A and B
 disagree on, and the read-out, all from the same frame.
 
 `render_view` is what the render worker runs after the engine: it draws with `app.draw`,
@@ -36,12 +36,14 @@ CAN_WINDOW_HALF_S = 5.0  # the CAN plot shows this long before and after the pla
 AB_GAP_PX = 8  # between the A and B camera pictures
 AB_GAP_COLOUR = (255, 255, 255)
 AB_BIRD_EYE_GAP_M = 2.0  # between the A and B bird's-eye views in the 3D scene
-# the stage panels' tab titles, by their switch in `app.state.Panels`
-PANEL_TITLES = {
+# the stage pictures' names, by `app.state.STAGES`
+STAGE_TITLES = {
     "motion_stereo": "Motion stereo",
     "symmetry": "Symmetry",
     "pedestrians": "Pedestrians",
     "guard_rails": "Guard rails",
+    "timings": "Timings",
+    "none": "none",
 }
 # the state's layers as app.overlays names them (ground truth is app.draw's)
 OVERLAY_OF_LAYER = {
@@ -86,7 +88,7 @@ class FrameSource(Protocol):
 class FrameView:
     """A rendered frame: its index, the (H + strip, W, 3) uint8 RGB camera picture (A and B
     side by side, (H + strip, 2 W + gap, 3), when comparing), the read-out line, set A's
-    stage timings, the stage panels switched on as (title, RGB image), and the markdown
+    stage timings, the stage picture shown as (title, RGB image), and the markdown
     list of detections only A or only B has ("" when not comparing); the bird's-eye views
     as (geometry, ground texture) for A, and B beside it, when that panel is on."""
 
@@ -226,7 +228,8 @@ def overlay_names(layers: Layers) -> list[str]:
 
 
 def stage_panels(result: FrameResult, state: ViewState) -> tuple[tuple[str, draw.RgbImage], ...]:
-    """The stage images beside the camera that `state.panels` switches on: (tab title, RGB)."""
+    """The stage picture `state.panels` shows under the camera, as (title, RGB image); none
+    for "timings" (a table) and "none"."""
     threshold = state.params.pedestrian.symmetry_threshold
     makers = {
         "motion_stereo": lambda: panels.motion_stereo_panel(result.motion_stereo),
@@ -234,9 +237,8 @@ def stage_panels(result: FrameResult, state: ViewState) -> tuple[tuple[str, draw
         "pedestrians": lambda: panels.pedestrian_symmetry_panel(result.pedestrian, threshold),
         "guard_rails": lambda: panels.guard_rail_panel(result.guardrail.checks, result.areas),
     }
-    return tuple(
-        (PANEL_TITLES[name], make()) for name, make in makers.items() if getattr(state.panels, name)
-    )
+    stage = state.panels.stage
+    return ((STAGE_TITLES[stage], makers[stage]()),) if stage in makers else ()
 
 
 @dataclass(frozen=True, eq=False)

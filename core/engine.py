@@ -15,7 +15,9 @@
 The engine is the only module that knows this order. It owns what crosses frames: the pitch
 memory, the previous frame's vehicle boxes, motion stereo's background and the tracker.
 `process` expects frames in order; `seek(drive, index)` brings the engine to any frame of a
-drive by resetting that state and replaying the `replay_window(params)` frames before it.
+drive: a frame a little ahead is reached by processing the frames in between (as playback
+skipping frames would), any other by resetting that state and replaying the
+`replay_window(params)` frames before it.
 
 Replay tolerance (what a seek reproduces of playing the drive from its start):
     - motion stereo's background forgets a frame after `frames_to_forget` frames up to half
@@ -200,16 +202,21 @@ class FusionEngine:
 
     def seek(self, frames: Frames, index: int) -> FrameResult:
         """The result of frame `index` of `frames`: processed next when it follows the last
-        frame, otherwise after a reset and a replay of up to `replay_window` frames. A
-        replayed frame that cannot be read (RecordingError) resets the state again, as a
-        gap in the drive would; the wanted frame's own RecordingError passes through."""
+        frame; after the frames in between when it lies ahead of the last frame within
+        `replay_window` (as playing on would); otherwise after a reset and a replay of up
+        to `replay_window` frames. A frame in between that cannot be read (RecordingError)
+        resets the state, as a gap in the drive would; the wanted frame's own RecordingError
+        passes through. `replayed` counts the frames processed before `index`."""
         if not 0 <= index < len(frames):
             raise ValueError(f"index: expected a frame 0..{len(frames) - 1}, got {index}")
-        if self.last_index is not None and index == self.last_index + 1:
-            return self.process(frames.frame(index))
+        window = replay_window(self.params)
+        last = self.last_index
         wanted = frames.frame(index)
-        self.reset()
-        first = max(0, index - replay_window(self.params))
+        if last is not None and last < index <= last + window:
+            first = last + 1  # play on from the state the engine has
+        else:
+            self.reset()
+            first = max(0, index - window)
         for i in range(first, index):
             try:
                 frame = frames.frame(i)

@@ -34,7 +34,7 @@ SETTLE_MS = 1_000  # longer than a seek's replay and render
 
 # The camera image: the first <img> viser fills from a blob with a rendered picture.
 CAMERA_IMG = "img[src^='blob:']"
-# Whatever rendered picture is on screen (the camera, or the stage panel of the open tab).
+# The rendered pictures on screen: the camera, then the stage picture under it.
 VISIBLE_IMG = "img[src^='blob:']:visible"
 
 
@@ -89,14 +89,22 @@ def pixels(image: Locator) -> str:
     )
 
 
-def changed_pixels(page: Page, selector: str, before: str) -> str:
-    """Wait until the first <img> matching `selector` shows other pixels than `before`."""
+def stage_picture(page: Page) -> Locator:
+    """The stage picture under the camera."""
+    return page.locator(VISIBLE_IMG).nth(1)
+
+
+def changed_pixels(page: Page, image: Locator, before: str) -> str:
+    """Wait until `image` shows other pixels than `before`, the same on two reads 100 ms
+    apart (a read while the page swaps pictures can catch one half drawn); its digest."""
+    last = before
     for _ in range(TIMEOUT_MS // 100):
-        now = pixels(page.locator(selector).first)
-        if now != before:
+        now = pixels(image)
+        if now != before and now == last:
             return now
+        last = now
         page.wait_for_timeout(100)
-    raise AssertionError(f"{selector}: the picture did not change in {TIMEOUT_MS} ms")
+    raise AssertionError(f"{image}: the picture did not change in {TIMEOUT_MS} ms")
 
 
 def field(page: Page, label: str) -> Locator:

@@ -11,13 +11,13 @@ from app_fakes import Recordings
 from browser_page import (
     CAMERA_IMG,
     TIMEOUT_MS,
-    VISIBLE_IMG,
     camera_src,
     changed_pixels,
     field,
     pixels,
     serving,
     set_field,
+    stage_picture,
 )
 from playwright.sync_api import Page, expect
 
@@ -39,13 +39,13 @@ def test_a_threshold_changes_the_binarised_image(recordings: Recordings, page: P
         camera_src(page)
         set_field(page, "go to time s", "1.0")  # motion stereo needs frames before it
         page.get_by_text("frame 10 /").wait_for(timeout=TIMEOUT_MS)
-        page.get_by_role("tab", name="Motion stereo").click()
-        before = pixels(page.locator(VISIBLE_IMG).first)
+        stage_picture(page).wait_for(timeout=TIMEOUT_MS)
+        before = pixels(stage_picture(page))
         open_folders(page, "Parameters", "motion_stereo")
         set_field(page, XI, "80")
-        after = changed_pixels(page, VISIBLE_IMG, before)
+        after = changed_pixels(page, stage_picture(page), before)
         set_field(page, XI, "20")  # the paper's value again: the first picture again
-        assert changed_pixels(page, VISIBLE_IMG, after) == before
+        assert changed_pixels(page, stage_picture(page), after) == before
 
 
 def test_a_layer_toggled_off_and_on_changes_the_picture_and_back(
@@ -53,11 +53,12 @@ def test_a_layer_toggled_off_and_on_changes_the_picture_and_back(
 ) -> None:
     with serving(page, recordings.root, recordings.name):
         camera_src(page)
-        before = pixels(page.locator(CAMERA_IMG).first)
+        camera = page.locator(CAMERA_IMG).first
+        before = pixels(camera)
         page.get_by_label("radar", exact=True).click()
-        without_radar = changed_pixels(page, CAMERA_IMG, before)
+        without_radar = changed_pixels(page, camera, before)
         page.get_by_label("radar", exact=True).click()
-        assert changed_pixels(page, CAMERA_IMG, without_radar) == before
+        assert changed_pixels(page, camera, without_radar) == before
 
 
 def test_a_saved_preset_brings_a_value_back_and_undo_too(

@@ -13,6 +13,7 @@ from app.state import Layers, Panels, ViewState
 from app.view import (
     AB_GAP_PX,
     OVERLAY_OF_LAYER,
+    STAGE_TITLES,
     FrameView,
     can_series,
     can_window,
@@ -63,10 +64,10 @@ def test_view_without_layers_shows_the_plain_frame() -> None:
 def test_every_layer_but_truth_is_an_overlay_and_every_stage_has_a_panel() -> None:
     assert set(OVERLAY_OF_LAYER) == set(Layers.names()) - {"truth"}
     assert set(OVERLAY_OF_LAYER.values()) == set(overlays.LAYERS)
-    view = _view(FakeDrive(frames=3), ViewState(frame=2))
-    titles = [title for title, _ in view.panels]
-    assert titles == ["Motion stereo", "Symmetry", "Pedestrians", "Guard rails"]
-    assert all(image.dtype == np.uint8 and image.shape[2] == 3 for _, image in view.panels)
+    for stage in ("motion_stereo", "symmetry", "pedestrians", "guard_rails"):
+        state = ViewState(frame=2, panels=Panels(stage=stage))
+        ((title, image),) = _view(FakeDrive(frames=3), state).panels
+        assert title == STAGE_TITLES[stage] and image.dtype == np.uint8 and image.shape[2] == 3
 
 
 def test_a_result_of_another_frame_is_refused() -> None:
@@ -103,13 +104,15 @@ def test_the_frame_cache_keeps_the_last_frames_read() -> None:
     assert len(cache) == 10
 
 
-def test_panels_switched_off_are_not_drawn() -> None:
-    only = Panels(**dict.fromkeys(Panels.names(), False))
-    view = _view(FakeDrive(frames=3), ViewState(frame=2, panels=only))
-    assert view.panels == ()
-    guard_rails = Panels(**{**dict.fromkeys(Panels.names(), False), "guard_rails": True})
-    view = _view(FakeDrive(frames=3), ViewState(frame=2, panels=guard_rails))
+def test_only_the_stage_picture_shown_is_drawn() -> None:
+    drive = FakeDrive(frames=3)
+    view = _view(drive, ViewState(frame=2, panels=Panels(stage="guard_rails")))
     assert [title for title, _ in view.panels] == ["Guard rails"]
+    for nothing in ("timings", "none"):
+        assert _view(drive, ViewState(frame=2, panels=Panels(stage=nothing))).panels == ()
+    assert _view(drive, ViewState(frame=2, panels=Panels(bird_eye=False))).bird_eyes == ()
+    with pytest.raises(ValueError, match="stage: expected one of motion_stereo"):
+        Panels(stage="everything")
 
 
 def test_comparing_puts_a_and_b_side_by_side_and_lists_the_differences() -> None:

@@ -106,6 +106,21 @@ def test_seeking_the_next_frame_processes_just_it() -> None:
             engine.seek(drive, len(drive))
 
 
+def test_a_seek_a_little_ahead_plays_the_frames_in_between() -> None:
+    played = _playback(SEEK_DRIVE)
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        engine = FusionEngine(Params(), drive.camera)
+        engine.seek(drive, 0)
+        ahead = engine.seek(drive, 5)  # frames 1..4 processed on the way, as played
+        assert ahead.replayed == 4
+        assert np.array_equal(ahead.motion_stereo.obstacles, played[5].motion_stereo.obstacles)
+        assert [t.id for t in ahead.tracking.tracks] == [t.id for t in played[5].tracking.tracks]
+        far = engine.seek(drive, 5 + replay_window(Params()) + 1)  # beyond the window: replay
+        assert far.replayed == replay_window(Params())
+        back = engine.seek(drive, 10)  # backwards: replay
+        assert back.replayed == 10
+
+
 def test_a_seek_past_a_frame_that_cannot_be_read_replays_from_after_it() -> None:
     class Damaged:
         def __init__(self, drive: Drive, bad: int) -> None:

@@ -1,0 +1,73 @@
+"""scripts/bench_inspector.py end to end with tiny counts: it prints finite figures and leaves
+no server behind. No time is asserted: the script measures, the people reading it judge.
+
+Needs Debian's chromium at /usr/bin/chromium; without it the test skips, except when CI or
+REQUIRE_BROWSER is set, where it fails (as tests/app/test_browser.py).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+import os
+import sys
+from pathlib import Path
+from types import ModuleType
+
+import pytest
+
+SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "bench_inspector.py"
+CHROMIUM = Path("/usr/bin/chromium")
+
+
+def load_script() -> ModuleType:
+    spec = importlib.util.spec_from_file_location("bench_inspector", SCRIPT)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up
+    spec.loader.exec_module(module)
+    return module
+
+
+def numbers(value: object) -> list[float]:
+    """Every number in a JSON value, booleans aside."""
+    if isinstance(value, bool):
+        return []
+    if isinstance(value, int | float):
+        return [float(value)]
+    if isinstance(value, dict):
+        return [x for v in value.values() for x in numbers(v)]
+    if isinstance(value, list):
+        return [x for v in value for x in numbers(v)]
+    return []
+
+
+def test_tiny_run_prints_finite_figures_and_stops_its_server(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    if not CHROMIUM.exists():
+        message = f"the inspector benchmark needs Debian chromium at {CHROMIUM}"
+        if os.environ.get("CI") or os.environ.get("REQUIRE_BROWSER"):
+            pytest.fail(message + " (CI / REQUIRE_BROWSER is set)")
+        pytest.skip(message)
+    bench = load_script()
+    args = ["--seeks", "3", "--moves", "3", "--play-s", "2", "--tabs", "2", "--warmup", "1"]
+    code = bench.main([*args, "--json", "--no-progress"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+
+    table, _, doc = out.partition("\n{")
+    summary = json.loads("{" + doc)
+    for name in ("seek to a random frame", "parameter change -> panels"):
+        assert name in table
+    assert [lat["count"] for lat in summary["latency"]] == [3, 3]
+    # a miss would print as null (no latency): every action finished
+    assert all(math.isfinite(x) for x in numbers(summary["latency"])), summary["latency"]
+    # one tab (its Camera and Motion stereo tabs), two with one idle, both playing (+ mean)
+    assert len(summary["playback"]) == 4  # one tab; with the others idle; all playing (2)
+    assert all(math.isfinite(p["fps"]) and p["fps"] >= 0 for p in summary["playback"])
+    assert all(v > 0 for v in summary["memory"]["rss_kib"].values())
+    assert math.isfinite(summary["memory"]["growth_pct"])
+
+    assert not Path(f"/proc/{summary['server_pid']}").exists()
