@@ -46,7 +46,7 @@ PLAYBACK_RATES = ("0.25x", "0.5x", "1x", "2x", "4x")  # of the drive's own frame
 LAYER_LABELS = {**OVERLAY_OF_LAYER, "truth": "ground truth"}
 PANEL_LABELS = {"bird_eye": "bird's-eye view (3D)", "can": "CAN speed and yaw rate"}
 # the right-hand panel, top to bottom
-CAMERA_ORDER, DIFF_ORDER, CAN_ORDER, STAGE_CHOICE_ORDER, STAGE_ORDER = range(5)
+CAMERA_ORDER, DIFF_ORDER, STAGE_CHOICE_ORDER, STAGE_ORDER, CAN_ORDER = range(5)
 TIMINGS_WINDOW = 50  # frames in the running median of the stage timings
 NOTICE_SECONDS = 8.0
 
@@ -277,7 +277,7 @@ class ClientSession:
                     {"scale": "kmh", "label": "km/h"},
                     {"scale": "degps", "label": "deg/s", "side": 1},
                 ),
-                aspect=3.0,
+                aspect=4.0,
                 order=CAN_ORDER,
             )
 
