@@ -19,6 +19,19 @@ drive: a frame a little ahead is reached by processing the frames in between (as
 skipping frames would), any other by resetting that state and replaying the
 `replay_window(params)` frames before it.
 
+State snapshots (`keep_states`, for the inspector's scrubbing): after each frame it
+processes, an engine built with `keep_states > 0` keeps that cross-frame state under the
+frame's index, the `keep_states` used last (least recently used dropped first). A seek to
+frame k first looks for a kept state of a frame j with k - replay_window < j < k, takes up
+the latest and processes j + 1 .. k. From a restored state the engine gives exactly what it
+gave when it processed on from that state the first time, so a seek's result depends on
+the path that made the snapshot: the same as a playback from the start when the snapshot
+was played to, the same as a fresh replay (within the tolerance below) when it was
+replayed to. A snapshot is valid only for the frames it came from and the engine's own
+parameters: an engine never changes its parameters and serves one drive; `reset()` drops
+every snapshot. The kept background, pitch histogram and previous frame are read-only and
+kept by reference; the tracks, which the tracker updates in place, are copied.
+
 Replay tolerance (what a seek reproduces of playing the drive from its start):
     - motion stereo's background forgets a frame after `frames_to_forget` frames up to half
       a grey level (`core.motion_stereo`); the window is at least that long, so the
@@ -34,6 +47,7 @@ Replay tolerance (what a seek reproduces of playing the drive from its start):
 from __future__ import annotations
 
 import time
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Protocol, TypeVar
@@ -43,12 +57,24 @@ from core.ego import NS_PER_S
 from core.guardrail import GuardRailResult, detect_guard_rails
 from core.io.errors import RecordingError
 from core.io.frame import FrameInput
-from core.motion_stereo import MotionStereo, MotionStereoResult, frames_to_forget
+from core.motion_stereo import (
+    MotionStereo,
+    MotionStereoResult,
+    MotionStereoState,
+    frames_to_forget,
+)
 from core.params import Params
 from core.pedestrian import PedestrianResult, detect_pedestrians
 from core.pitch import PitchMemory, PitchResult, detect_pitch
 from core.search_area import SearchArea, search_areas
-from core.tracking import Measurement, Track, Tracker, TrackResult, confirmed_sources
+from core.tracking import (
+    Measurement,
+    Track,
+    Tracker,
+    TrackerState,
+    TrackResult,
+    confirmed_sources,
+)
 from core.vehicle import VehicleResult, detect_vehicles
 
 MS_PER_S = 1000.0
@@ -57,6 +83,8 @@ MS_PER_S = 1000.0
 LONGEST_REPLAY_FRAMES = 200
 
 T = TypeVar("T")
+
+Box = tuple[float, float, float, float]
 
 
 @dataclass(frozen=True)
@@ -129,6 +157,26 @@ class Frames(Protocol):
     def frame(self, i: int) -> FrameInput: ...
 
 
+@dataclass(frozen=True)
+class _LastFrame:
+    """What the next frame reads of the previous one: its index (does it follow?) and its
+    time (the tracker's interval). Not the FrameInput: a kept state would hold its image."""
+
+    index: int
+    t_ns: int
+
+
+@dataclass(frozen=True, eq=False)
+class _EngineState:
+    """The engine's cross-frame state after one frame, as `process` of the next reads it."""
+
+    motion_stereo: MotionStereoState
+    tracker: TrackerState
+    pitch_memory: PitchMemory | None
+    vehicle_boxes: tuple[Box, ...]
+    last: _LastFrame
+
+
 def replay_window(params: Params) -> int:
     """Frames a seek replays before the wanted one: long enough for motion stereo's
     background to forget the frames before it and for a track to be confirmed again."""
@@ -175,53 +223,104 @@ class FusionEngine:
     """Paper 000's system on one drive: `process` one frame after the other, or `seek`.
 
     camera: the drive's calibrated camera (its pitch is the calibrated one; each frame's
-    detected pitch replaces it for that frame).
+    detected pitch replaces it for that frame). keep_states: how many frames' cross-frame
+    states to keep for `seek` (module docstring; 0, the default, keeps none). ValueError
+    naming keep_states when it is not an integer >= 0.
     """
 
-    def __init__(self, params: Params, camera: CameraModel) -> None:
+    def __init__(self, params: Params, camera: CameraModel, keep_states: int = 0) -> None:
+        if isinstance(keep_states, bool) or not isinstance(keep_states, int) or keep_states < 0:
+            raise ValueError(f"keep_states: expected an integer >= 0, got {keep_states!r}")
         self.params = params
         self.camera = camera
+        self.keep_states = keep_states
         self._motion_stereo = MotionStereo(params.motion_stereo)
         self._tracker = Tracker(params.tracking)
         self._pitch_memory: PitchMemory | None = None
-        self._vehicle_boxes: list[tuple[float, float, float, float]] = []
-        self._last: FrameInput | None = None
+        self._vehicle_boxes: tuple[Box, ...] = ()
+        self._last: _LastFrame | None = None
+        self._states: OrderedDict[int, _EngineState] = OrderedDict()
 
     @property
     def last_index(self) -> int | None:
         """Index of the frame processed last (None after a reset)."""
         return None if self._last is None else self._last.index
 
+    @property
+    def kept_states(self) -> tuple[int, ...]:
+        """Indices of the frames whose state is kept, least recently used first."""
+        return tuple(self._states)
+
     def reset(self) -> None:
-        """Forget every cross-frame state: the next frame is processed as a drive's first."""
+        """Forget every cross-frame state and every kept one: the next frame is processed
+        as a drive's first."""
+        self._start_over()
+        self._states.clear()
+
+    def _start_over(self) -> None:
+        """Forget the cross-frame state (not the kept ones): a new start within the drive."""
         self._motion_stereo.reset()
         self._tracker.reset()
         self._pitch_memory = None
-        self._vehicle_boxes = []
+        self._vehicle_boxes = ()
         self._last = None
 
+    def _keep(self, last: _LastFrame) -> None:
+        """Keep the state after frame `last`, the most recently used."""
+        self._states[last.index] = _EngineState(
+            self._motion_stereo.state(),
+            self._tracker.state(),
+            self._pitch_memory,
+            self._vehicle_boxes,
+            last,
+        )
+        self._states.move_to_end(last.index)
+        while len(self._states) > self.keep_states:
+            self._states.popitem(last=False)
+
+    def _restore(self, index: int) -> None:
+        """Take up the state kept after frame `index`, now the most recently used."""
+        state = self._states[index]
+        self._states.move_to_end(index)
+        self._motion_stereo.restore(state.motion_stereo)
+        self._tracker.restore(state.tracker)
+        self._pitch_memory = state.pitch_memory
+        self._vehicle_boxes = state.vehicle_boxes
+        self._last = state.last
+
+    def _nearest_kept(self, index: int, window: int) -> int | None:
+        """The latest frame j with index - window < j < index whose state is kept."""
+        return max((j for j in self._states if index - window < j < index), default=None)
+
     def seek(self, frames: Frames, index: int) -> FrameResult:
-        """The result of frame `index` of `frames`: processed next when it follows the last
-        frame; after the frames in between when it lies ahead of the last frame within
-        `replay_window` (as playing on would); otherwise after a reset and a replay of up
-        to `replay_window` frames. A frame in between that cannot be read (RecordingError)
-        resets the state, as a gap in the drive would; the wanted frame's own RecordingError
-        passes through. `replayed` counts the frames processed before `index`."""
+        """The result of frame `index` of `frames`: after the frames in between from the
+        latest state kept of a frame j with index - replay_window < j < index (module
+        docstring); else processed next when it follows the last frame, and after the
+        frames in between when it lies ahead of the last frame within `replay_window` (as
+        playing on would); otherwise after a reset of the cross-frame state (the kept
+        states stay) and a replay of up to `replay_window` frames. A frame in between that
+        cannot be read (RecordingError) resets the state, as a gap in the drive would; the
+        wanted frame's own RecordingError passes through. `replayed` counts the frames
+        processed before `index`."""
         if not 0 <= index < len(frames):
             raise ValueError(f"index: expected a frame 0..{len(frames) - 1}, got {index}")
         window = replay_window(self.params)
         last = self.last_index
         wanted = frames.frame(index)
-        if last is not None and last < index <= last + window:
+        kept = self._nearest_kept(index, window)
+        if kept is not None:
+            self._restore(kept)
+            first = kept + 1
+        elif last is not None and last < index <= last + window:
             first = last + 1  # play on from the state the engine has
         else:
-            self.reset()
+            self._start_over()
             first = max(0, index - window)
         for i in range(first, index):
             try:
                 frame = frames.frame(i)
             except RecordingError:
-                self.reset()
+                self._start_over()
                 continue
             self.process(frame)
         result = self.process(wanted)
@@ -229,9 +328,10 @@ class FusionEngine:
 
     def process(self, frame: FrameInput) -> FrameResult:
         """One frame, the stages in the paper's order (module docstring). A frame that does
-        not follow the last one (its index is not the next) starts over without history."""
+        not follow the last one (its index is not the next) starts over without history
+        (the kept states stay)."""
         if self._last is not None and frame.index != self._last.index + 1:
-            self.reset()
+            self._start_over()
         p = self.params
         image = frame.image
         pitch, pitch_ms = _timed(
@@ -251,7 +351,7 @@ class FusionEngine:
         vehicle, vehicle_ms = _timed(
             lambda: detect_vehicles(areas, frame.radar, camera, p.vehicle, rails.guard_rail_targets)
         )
-        boxes = [v.box_px for v in vehicle.vehicles]
+        boxes = tuple(v.box_px for v in vehicle.vehicles)
         pedestrian, pedestrian_ms = _timed(
             lambda: detect_pedestrians(
                 image,
@@ -267,9 +367,13 @@ class FusionEngine:
         tracks, tracking_ms = _timed(
             lambda: self._tracker.update(measurements, ego, max(dt_s, 0.0))
         )
+        # read-only: the next frame reads it, and a kept state holds it by reference
+        pitch.memory.row_histogram.flags.writeable = False
         self._pitch_memory = pitch.memory
         self._vehicle_boxes = boxes
-        self._last = frame
+        self._last = _LastFrame(frame.index, frame.t_ns)
+        if self.keep_states:
+            self._keep(self._last)
         return FrameResult(
             index=frame.index,
             t_ns=frame.t_ns,

@@ -57,7 +57,8 @@ Notes:
       past; replaying the `frames_to_forget(params)` frames (22 with the paper's weights)
       before a frame after `reset()` rebuilds its background. D can still differ on cells
       whose mean sits at xi, where a flip changes w and feeds back: 99.8 % to 100 % of the
-      valid cells agree on the bundled drives.
+      valid cells agree on the bundled drives. `state()` and `restore()` (beyond the paper)
+      carry the background across a jump exactly instead.
 """
 
 from __future__ import annotations
@@ -373,12 +374,27 @@ def _frozen(a: ArrayT) -> ArrayT:
     return a
 
 
+@dataclass(frozen=True, eq=False)
+class MotionStereoState:
+    """What `MotionStereo.update` carries from one frame to the next.
+
+    background: B', (rows, cols) uint8 grey levels on the grid, read-only (None before a
+    first frame); background_poly: the convex polygon of grid cells (col, row) that frame's
+    A saw, the cells where B' holds the camera's view. Immutable, so a state is kept by
+    reference, and restoring it any number of times gives the same next update.
+    """
+
+    background: U8Array | None
+    background_poly: tuple[tuple[float, float], ...]
+
+
 class MotionStereo:
     """The background B and the steps of paper 000 II-B, one `update()` per camera frame.
 
     Build one per drive; call `reset()` before a frame that does not follow the last one
     (a seek), then replay `frames_to_forget(params)` frames before the wanted one to rebuild
-    its background. Results never share memory that a later update writes.
+    its background, or `restore()` the `state()` kept after the frame before it. Results
+    never share memory that a later update writes.
     """
 
     def __init__(self, params: MotionStereoParams) -> None:
@@ -410,6 +426,29 @@ class MotionStereo:
         """Forget the background: the next update is a first frame."""
         self._background = None
         self._background_poly = []
+
+    def state(self) -> MotionStereoState:
+        """The background the next update reads (no copy: the background is read-only and
+        every update makes a new one)."""
+        return MotionStereoState(self._background, tuple(self._background_poly))
+
+    def restore(self, state: MotionStereoState) -> None:
+        """Take up `state` (from `state()` of a MotionStereo with these parameters): the next
+        update is the one that followed it. ValueError naming state.background when it is
+        not a read-only uint8 image of this grid's shape."""
+        background = state.background
+        if background is not None and (
+            background.shape != self.grid.shape
+            or background.dtype != np.uint8
+            or background.flags.writeable
+        ):
+            raise ValueError(
+                f"state.background: expected a read-only uint8 {self.grid.shape} grid image, "
+                f"got a {'writeable' if background.flags.writeable else 'read-only'} "
+                f"{background.dtype} {background.shape} array"
+            )
+        self._background = background
+        self._background_poly = list(state.background_poly)
 
     def update(
         self, image: U8Array, camera: CameraModel, ego: EgoMotion | None

@@ -37,6 +37,9 @@ filter (a random walk).
    track is dropped at its (`max_missed_frames` + 1)-th consecutive miss. Dropped ids are
    listed in `TrackResult.ended` and never reused (until `Tracker.reset`).
 
+`Tracker.state()` and `Tracker.restore(state)` keep and take up the tracks and the next id
+(a seek back to a frame whose state was kept).
+
 Guard rails are correlated the same way: every radar target labelled guard rail is a
 measurement of kind "guard_rail"; its tracked verdict is membership of
 `confirmed_sources(result, "guard_rail")`.
@@ -52,6 +55,7 @@ Notes:
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -442,6 +446,11 @@ class _TrackState:
         """Append this frame's position to the history, keeping the last history_length."""
         self.history_m = (*self.history_m, (self.x, self.y))[-params.history_length :]
 
+    def copied(self) -> _TrackState:
+        """An independent twin: every attribute is a float, int, bool, str, None or a tuple
+        of floats, so a shallow copy shares nothing that the in-place steps change."""
+        return copy.copy(self)
+
     def snapshot(self) -> Track:
         return Track(
             id=self.id,
@@ -463,11 +472,23 @@ class _TrackState:
         )
 
 
+@dataclass(frozen=True, eq=False)
+class TrackerState:
+    """What `Tracker.update` carries from one frame to the next: the live tracks' filters
+    (private copies that nothing changes; `Tracker.restore` copies them again) and the id
+    the next new track gets."""
+
+    tracks: tuple[_TrackState, ...]
+    next_id: int
+
+
 class Tracker:
     """The tracks of one drive (STYLE 12): feed it every frame's measurements in order.
 
     `reset()` forgets every track (a seek) and restarts ids at 1, so replaying the same
-    measurements after a reset gives identical results, ids included.
+    measurements after a reset gives identical results, ids included. `state()` keeps the
+    tracks after an update and `restore()` takes them up again: the updates that follow
+    are those that followed the state, ids included.
     """
 
     def __init__(self, params: TrackingParams) -> None:
@@ -477,6 +498,23 @@ class Tracker:
     def reset(self) -> None:
         self._tracks: list[_TrackState] = []
         self._next_id = 1
+
+    def state(self) -> TrackerState:
+        """The tracks and next id the next update reads, copied (updates change a track's
+        filter in place)."""
+        return TrackerState(tuple(t.copied() for t in self._tracks), self._next_id)
+
+    def restore(self, state: TrackerState) -> None:
+        """Take up `state` (from `state()` of a Tracker with these parameters); the state
+        stays as it was, so it can be restored again. ValueError naming state.next_id when
+        it is not above every track's id."""
+        highest = max((t.id for t in state.tracks), default=0)
+        if state.next_id <= highest:
+            raise ValueError(
+                f"state.next_id: expected an id above the tracks' ({highest}), got {state.next_id}"
+            )
+        self._tracks = [t.copied() for t in state.tracks]
+        self._next_id = state.next_id
 
     def update(
         self, measurements: Sequence[Measurement], ego: EgoMotion | None, dt_s: float

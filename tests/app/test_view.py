@@ -89,6 +89,16 @@ def test_an_engine_per_client_and_the_last_result_again_for_a_redraw() -> None:
     assert again.replayed == 6 and again is not first  # new parameters: replayed
 
 
+def test_a_scrub_back_takes_up_the_state_the_engine_kept() -> None:
+    drive = FakeDrive(frames=10)
+    engines = ClientEngines(drive.camera)
+    assert engines.result("a", drive, Params(), 6).replayed == 6  # 0..5 on the way, kept
+    assert engines.result("a", drive, Params(), 3).replayed == 0  # from 2's state
+    plain = ClientEngines(drive.camera, keep_states=0)
+    plain.result("a", drive, Params(), 6)
+    assert plain.result("a", drive, Params(), 3).replayed == 3  # a replay
+
+
 def test_the_frame_cache_keeps_the_last_frames_read() -> None:
     class Counting(FakeDrive):
         reads = 0

@@ -148,6 +148,111 @@ def test_a_seek_past_a_frame_that_cannot_be_read_replays_from_after_it() -> None
             engine.seek(damaged, 35)
 
 
+# --- kept states --------------------------------------------------------------------------
+KEEP = 256  # states kept by the engines below: more than any of them processes
+
+
+def _assert_same(a: FrameResult, b: FrameResult) -> None:
+    """Two results of one frame are the same, bit for bit where it matters downstream."""
+    assert a.index == b.index
+    assert a.pitch.pitch_rad == b.pitch.pitch_rad
+    for name in ("obstacles", "image_mask", "next_background"):
+        assert np.array_equal(getattr(a.motion_stereo, name), getattr(b.motion_stereo, name))
+    assert [v.box_px for v in a.vehicle.vehicles] == [v.box_px for v in b.vehicle.vehicles]
+    assert [(t.id, t.x_m, t.y_m) for t in a.tracking.tracks] == [
+        (t.id, t.x_m, t.y_m) for t in b.tracking.tracks
+    ]
+    assert a.tracking == b.tracking
+
+
+def test_a_seek_back_takes_up_the_state_kept_after_the_frame_before() -> None:
+    played = _playback(SEEK_DRIVE)
+    window = replay_window(Params())
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        engine = FusionEngine(Params(), drive.camera, keep_states=KEEP)
+        for i in range(41):  # keeping states changes no result
+            _assert_same(engine.seek(drive, i), played[i])
+        assert engine.kept_states == tuple(range(41))
+        assert engine.seek(drive, 80).replayed == window  # nothing kept near 80: a replay
+        back = engine.seek(drive, 30)  # from the state after 29
+        assert back.replayed == 0
+        _assert_same(back, played[30])
+        on = engine.seek(drive, 35)  # from the state after 34, kept by the first playback
+        assert on.replayed == 0
+        _assert_same(on, played[35])
+        ahead = engine.seek(drive, 45)  # the latest state kept before 45 is 40's
+        assert ahead.replayed == 4
+        _assert_same(ahead, played[45])
+        # the states the replay of 80 kept give what that replay's path gives (it started
+        # over at 80 - window), not what a playback from the start gives
+        clean = FusionEngine(Params(), drive.camera)
+        for i in range(80 - window, 71):
+            expected = clean.process(drive.frame(i))
+        replayed = engine.seek(drive, 70)
+        assert replayed.replayed == 0
+        _assert_same(replayed, expected)
+
+
+def test_kept_states_are_the_last_used() -> None:
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        engine = FusionEngine(Params(), drive.camera, keep_states=5)
+        for i in range(41):
+            engine.seek(drive, i)
+        assert engine.kept_states == (36, 37, 38, 39, 40)
+        assert engine.seek(drive, 38).replayed == 0  # from 37's state
+        assert engine.kept_states == (36, 39, 40, 37, 38)  # least recently used first
+        assert engine.seek(drive, 41).replayed == 0  # from 40's
+        assert engine.kept_states == (39, 37, 38, 40, 41)  # 36, used longest ago, dropped
+        assert engine.seek(drive, 10).replayed == 10  # nothing kept near 10: a replay
+        assert engine.kept_states == (6, 7, 8, 9, 10)
+
+
+def test_an_engine_keeps_no_state_by_default() -> None:
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        engine = FusionEngine(Params(), drive.camera)
+        for i in range(41):
+            engine.seek(drive, i)
+        assert engine.kept_states == ()
+        assert engine.seek(drive, 30).replayed == replay_window(Params())
+
+
+def test_reset_drops_the_kept_states_and_a_jump_keeps_them() -> None:
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        engine = FusionEngine(Params(), drive.camera, keep_states=KEEP)
+        for i in range(11):
+            engine.seek(drive, i)
+        jumped = engine.process(drive.frame(90))  # a frame out of order starts over...
+        assert jumped.motion_stereo.mode == "first_frame"
+        assert engine.kept_states == (*range(11), 90)  # ...and keeps the states
+        assert engine.seek(drive, 6).replayed == 0
+        engine.reset()
+        assert engine.kept_states == () and engine.last_index is None
+        assert engine.seek(drive, 6).replayed == 6
+
+
+def test_a_state_kept_before_the_window_is_not_used() -> None:
+    played = _playback(SEEK_DRIVE)
+    window = replay_window(Params())
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        engine = FusionEngine(Params(), drive.camera, keep_states=KEEP)
+        for i in range(11):
+            engine.seek(drive, i)
+        # 10's state is window frames back: the engine plays on from 10 as it would without
+        ahead = engine.seek(drive, 10 + window)
+        assert ahead.replayed == window - 1
+        _assert_same(ahead, played[10 + window])
+        # the latest kept is more than window frames back: a replay
+        far = 10 + 3 * window
+        assert engine.seek(drive, far).replayed == window
+
+
+@pytest.mark.parametrize("keep", [-1, 1.5, True])
+def test_bad_keep_states_is_refused_by_name(keep: object) -> None:
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        with pytest.raises(ValueError, match="keep_states: expected an integer >= 0"):
+            FusionEngine(Params(), drive.camera, keep_states=keep)  # type: ignore[arg-type]
+
+
 def test_fusionscope_run_writes_a_line_per_frame(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "results.jsonl"
     assert main(["run", str(DEFAULT_RECORDINGS / SEEK_DRIVE), "--out", str(out)]) == 0

@@ -542,6 +542,65 @@ def test_seek_by_replaying_the_frames_the_background_remembers(
     assert agreement(1) < 0.95
 
 
+RESTORE_AFTER = 20  # the highway frame whose state is kept and taken up again
+
+
+def test_a_restored_state_gives_the_updates_that_followed_it(
+    highway_run: tuple[Drive, list[CameraModel], list[MotionStereoResult]],
+) -> None:
+    drive, cams, run = highway_run
+    ms = MotionStereo(MotionStereoParams())
+    for i in range(RESTORE_AFTER + 1):
+        ms.update(drive.frame(i).image, cams[i], drive.frame(i).ego)
+    kept = ms.state()
+    assert kept.background is not None and not kept.background.flags.writeable
+    following = range(RESTORE_AFTER + 1, REPLAY_AT + 1)
+    for i in following:  # the background moves on; the kept state does not
+        ms.update(drive.frame(i).image, cams[i], drive.frame(i).ego)
+    for taker in (MotionStereo(MotionStereoParams()), ms):
+        taker.restore(kept)
+        for i in following:
+            r = taker.update(drive.frame(i).image, cams[i], drive.frame(i).ego)
+            assert r.mode == run[i].mode == "motion_stereo"
+            for name in ("background", "valid", "obstacles", "next_background", "image_mask"):
+                np.testing.assert_array_equal(getattr(r, name), getattr(run[i], name), name)
+    assert run[REPLAY_AT].obstacles.any()  # the frames compared have obstacles to get wrong
+
+
+def test_the_state_before_a_first_frame_restores_a_first_frame(
+    params: MotionStereoParams,
+    cam: CameraModel,
+    box: tuple[tuple[U8, npt.NDArray[np.uint16]], ...],
+) -> None:
+    (im0, _), (im1, _) = box
+    ms = MotionStereo(params)
+    empty = ms.state()
+    assert empty.background is None and empty.background_poly == ()
+    ms.update(im0, cam, None)
+    ms.restore(empty)
+    assert not ms.has_background
+    assert ms.update(im1, cam, EgoMotion(1.5, 0.0, 0.0, FRAME_S)).mode == "first_frame"
+
+
+def test_a_wrong_background_is_refused_by_name(
+    params: MotionStereoParams,
+    cam: CameraModel,
+    box: tuple[tuple[U8, npt.NDArray[np.uint16]], ...],
+) -> None:
+    (im0, _), _ = box
+    ms = MotionStereo(params)
+    ms.update(im0, cam, None)
+    kept = ms.state()
+    assert kept.background is not None
+    shape = grid_for(params).shape
+    writeable = kept.background.copy()
+    smaller = np.zeros((shape[0] - 1, shape[1]), dtype=np.uint8)
+    smaller.flags.writeable = False
+    for bad, got in ((writeable, "got a writeable uint8"), (smaller, rf"\({shape[0] - 1}, ")):
+        with pytest.raises(ValueError, match=rf"state\.background: expected a read-only.*{got}"):
+            ms.restore(replace(kept, background=bad))
+
+
 def test_image_mask_is_d_reprojected(
     highway_run: tuple[Drive, list[CameraModel], list[MotionStereoResult]],
 ) -> None:

@@ -309,6 +309,37 @@ def test_reset_restarts_ids_and_replays_identically() -> None:
     assert min(t.id for r in first for t in r.tracks) == 1
 
 
+def test_a_restored_state_gives_the_updates_that_followed_it() -> None:
+    # a lead car and a pedestrian, a passing false positive, the ego car turning: every
+    # step changes the kept tracks' filters in place
+    frames = [
+        [_m(20.0 - 0.5 * k, 0.2, 0), _m(12.0, 3.0 - 0.1 * k, 0, "pedestrian", 0.6)]
+        + ([_m(35.0, -4.0, 1)] if k in (4, 9) else [])
+        for k in range(14)
+    ]
+    ego = step(12.0, 0.1, DT_S)
+    tracker = Tracker(P)
+    for f in frames[:6]:
+        tracker.update(f, ego, DT_S)
+    kept = tracker.state()
+    assert {t.kind for t in kept.tracks} == {"vehicle", "pedestrian"}
+    after = [tracker.update(f, ego, DT_S) for f in frames[6:]]
+    assert any(t.confirmed and t.age > 6 for t in after[-1].tracks)
+    assert max(t.id for r in after for t in r.tracks) >= kept.next_id  # a track born after
+    for taker in (Tracker(P), tracker):
+        taker.restore(kept)
+        assert [taker.update(f, ego, DT_S) for f in frames[6:]] == after
+
+
+def test_a_state_whose_next_id_is_taken_is_refused_by_name() -> None:
+    tracker = Tracker(P)
+    tracker.update([_m(20.0, 0.0, 0), _m(30.0, 2.0, 1)], STILL, DT_S)
+    kept = tracker.state()
+    assert kept.next_id == 3
+    with pytest.raises(ValueError, match=r"state\.next_id: expected an id above the tracks' \(2\)"):
+        tracker.restore(dataclasses.replace(kept, next_id=2))
+
+
 def test_empty_measurements_and_zero_dt() -> None:
     tracker = Tracker(P)
     assert tracker.update([], None, DT_S) == TrackResult((), ())
