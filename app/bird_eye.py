@@ -20,7 +20,7 @@ the image's up is +x (far ahead) and its right -y (the car's right):
     R = [[0, -1, 0], [-1, 0, 0], [0, 0, -1]]  (columns: images of the node's x, y, z),
 half a turn about (1, -1, 0)/sqrt(2), wxyz = (0, sqrt(1/2), -sqrt(1/2), 0).
 
-Vehicles are boxes `VEHICLE_FOOTPRINT_LENGTH_M` long (as in `app.panels.bird_eye_texture`)
+Vehicles are boxes `VEHICLE_FOOTPRINT_LENGTH_M` long (`app.panels`)
 starting at the radar distance and extending away, as wide as vision measured them,
 `VEHICLE_HEIGHT_M` high. Colours are those of the camera overlays (`app.overlays`).
 """

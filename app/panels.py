@@ -37,17 +37,13 @@ from app.overlays import (
     PEDESTRIAN_COLOUR,
     PEDESTRIAN_REJECTED_COLOUR,
     SHORT_LINE_COLOUR,
-    VEHICLE_COLOUR,
-    radar_colour,
 )
-from core.camera import BirdEyeGrid
-from core.checks import require_grey_image
 from core.guardrail import GuardRailCheck
 from core.motion_stereo import MotionStereoResult, grid_for
 from core.params import MotionStereoParams
 from core.pedestrian import PedestrianResult
 from core.search_area import SearchArea
-from core.vehicle import TargetResult, Vehicle
+from core.vehicle import TargetResult
 
 GreyImage = npt.NDArray[np.uint8]
 
@@ -71,10 +67,8 @@ GUARD_RAIL_TILE_HW_PX = (112, 352)
 SHEET_COLUMNS = 3
 PLOT_HEIGHT_PX = 160
 BAND_ROW_PX = 6
-BIRD_EYE_SCALE = 2
 # Display only: the radar and vision give a vehicle's width, not its length.
 VEHICLE_FOOTPRINT_LENGTH_M = 4.5
-BIRD_EYE_CROSS_CELLS = 8
 
 
 # --- layout ---------------------------------------------------------------------------------
@@ -435,45 +429,3 @@ def bird_eye_extent_m(params: MotionStereoParams) -> tuple[float, float, float, 
     texture cover, vehicle frame (x forward, y left), cell edges."""
     grid = grid_for(params)
     return grid.x_min_m, grid.x_max_m, grid.y_min_m, grid.y_max_m
-
-
-def bird_eye_texture(
-    bird_eye: GreyImage,
-    grid: BirdEyeGrid,
-    targets: Sequence[TargetResult] = (),
-    vehicles: Sequence[Vehicle] = (),
-    scale: int = BIRD_EYE_SCALE,
-) -> RgbImage:
-    """The bird's-eye grey image as an RGB texture `scale` times larger, with the radar
-    targets as crosses coloured by verdict (`app.overlays.radar_colour`) and the vehicles'
-    footprints (width from vision, `VEHICLE_FOOTPRINT_LENGTH_M` deep from the radar
-    distance) in `VEHICLE_COLOUR`.
-
-    bird_eye: (rows, cols) uint8 = grid.shape (e.g. `MotionStereoResult.bird_eye`); row 0
-    is x_max_m (far), column 0 y_max_m (left): laid on the ground plane over
-    `bird_eye_extent_m` with far up. Shape: (rows scale, cols scale, 3).
-    """
-    require_grey_image("bird_eye", bird_eye)
-    if bird_eye.shape != grid.shape:
-        raise ValueError(f"bird_eye: expected the grid's shape {grid.shape}, got {bird_eye.shape}")
-    if scale < 1:
-        raise ValueError(f"scale: expected a whole factor >= 1, got {scale}")
-    out = np.repeat(np.repeat(grey_to_rgb(bird_eye), scale, axis=0), scale, axis=1)
-
-    def at(cells: npt.NDArray[np.float64]) -> list[tuple[int, int]]:
-        """Grid (col, row) -> texture pixels, cell centres at (k + 0.5) scale."""
-        return [(round((c + 0.5) * scale), round((r + 0.5) * scale)) for c, r in cells.tolist()]
-
-    for v in vehicles:
-        half = v.width_m / 2
-        x0, x1 = v.distance_m, v.distance_m + VEHICLE_FOOTPRINT_LENGTH_M
-        y0, y1 = v.lateral_m - half, v.lateral_m + half
-        corners = at(grid.cells_from_ground([[x0, y0], [x0, y1], [x1, y1], [x1, y0]]))
-        pts = np.array(corners, dtype=np.int32).reshape(-1, 1, 2)
-        cv2.polylines(out, [pts], True, VEHICLE_COLOUR, 2)
-    if targets:
-        ground = [[t.target.x_m, t.target.y_m] for t in targets]
-        for t, centre in zip(targets, at(grid.cells_from_ground(ground)), strict=True):
-            size = BIRD_EYE_CROSS_CELLS * scale
-            cv2.drawMarker(out, centre, radar_colour(t.verdict), cv2.MARKER_CROSS, size, 2)
-    return out

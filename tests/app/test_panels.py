@@ -10,13 +10,12 @@ import pytest
 from engine_frames import engine_result
 
 from app import draw, overlays, panels
-from core.camera import BirdEyeGrid
 from core.guardrail import GuardRailCheck
 from core.io.frame import RadarTarget
 from core.params import MotionStereoParams
 from core.pedestrian import Bands, PedestrianCandidate, PedestrianResult
 from core.search_area import SearchArea
-from core.vehicle import Candidate, TargetResult, Vehicle
+from core.vehicle import Candidate, TargetResult
 
 STRIP = draw.STRIP_HEIGHT_PX
 SEP = panels.SEPARATOR_PX
@@ -305,52 +304,8 @@ def test_guard_rail_panel_has_one_tile_per_check_and_an_empty_state() -> None:
     np.testing.assert_array_equal(panels.guard_rail_panel([], areas), expected)
 
 
-# --- bird's-eye texture ---------------------------------------------------------------------
+# --- bird's-eye extent ----------------------------------------------------------------------
 
 
 def test_bird_eye_extent_is_the_grid_of_the_parameters() -> None:
     assert panels.bird_eye_extent_m(MotionStereoParams()) == (4.0, 40.0, -10.0, 10.0)
-
-
-def small_grid() -> BirdEyeGrid:
-    return BirdEyeGrid(x_min_m=4.0, x_max_m=8.0, y_min_m=-2.0, y_max_m=2.0, cell_m=0.1)
-
-
-def target_at(x_m: float, y_m: float, verdict: str) -> TargetResult:
-    return dataclasses.replace(
-        searched_target(),
-        target=radar(x_m, y_m),
-        verdict=verdict,  # type: ignore[arg-type]
-    )
-
-
-def test_bird_eye_texture_puts_targets_on_their_road_cells_far_up() -> None:
-    grid = small_grid()
-    grey = np.zeros(grid.shape, np.uint8)
-    # (6 m, 1 m left): grid col 9.5, row 19.5, texture pixel (20, 40) at scale 2;
-    # (7 m, -1 m): col 29.5, row 9.5 -> (60, 20), higher up as it is farther
-    targets = [target_at(6.0, 1.0, "vehicle"), target_at(7.0, -1.0, "guard_rail")]
-    out = panels.bird_eye_texture(grey, grid, targets, scale=2)
-    assert out.shape == (80, 80, 3)
-    assert tuple(out[40, 20]) == overlays.RADAR_REFINED_COLOUR
-    assert tuple(out[20, 60]) == overlays.RADAR_GUARD_RAIL_COLOUR
-
-
-def test_bird_eye_texture_outlines_a_vehicle_footprint() -> None:
-    grid = small_grid()
-    car = Vehicle((0.0, 0.0, 1.0, 1.0), 5.0, 0.0, 2.0, 5.0, (0,))
-    out = panels.bird_eye_texture(np.zeros(grid.shape, np.uint8), grid, (), [car], scale=1)
-    orange = is_colour(out, overlays.VEHICLE_COLOUR)
-    # near edge x = 5 m: row 29.5 -> 30; sides y = +-1 m: cols 9.5 and 29.5 -> 10 and 30
-    assert orange[30, 15:26].all()
-    assert orange[5:30, 10].any() and orange[5:30, 30].any()
-    assert not orange[32:].any()
-
-
-def test_bird_eye_texture_refuses_a_picture_of_another_shape() -> None:
-    with pytest.raises(ValueError, match=r"bird_eye: expected the grid's shape \(40, 40\)"):
-        panels.bird_eye_texture(np.zeros((40, 41), np.uint8), small_grid())
-    with pytest.raises(ValueError, match=r"bird_eye: expected an \(H, W\) uint8 grey image"):
-        panels.bird_eye_texture(np.zeros((40, 40, 3), np.uint8), small_grid())
-    with pytest.raises(ValueError, match="scale: expected a whole factor >= 1"):
-        panels.bird_eye_texture(np.zeros((40, 40), np.uint8), small_grid(), scale=0)
