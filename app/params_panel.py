@@ -119,6 +119,7 @@ class ParamsPanel:
                 )
             )
         self.show(sets.sets)
+        self._list_presets()
 
     @staticmethod
     def _field(gui: viser.GuiApi, name: str, paper_value: object) -> Any:
@@ -142,7 +143,6 @@ class ParamsPanel:
         self._compare.value = sets.b is not None  # type: ignore[misc]  # asymmetric property
         self._editing.value = sets.editing  # type: ignore[misc]
         self._editing.disabled = self._swap.disabled = sets.b is None
-        self._preset.options = tuple(self._sets.presets.names()) or (NO_CHOICE,)
 
     def _do(self, action: Callable[[], object]) -> None:
         try:
@@ -155,11 +155,16 @@ class ParamsPanel:
     def _save_preset(self) -> None:
         def save() -> None:
             path = self._sets.save_preset(self._preset_name.value)
-            self._preset.options = tuple(self._sets.presets.names())
+            self._list_presets()
             self._preset.value = Path(path).stem  # type: ignore[misc]
             self._notify("Preset saved", path, "green")
 
         self._do(save)
+
+    def _list_presets(self) -> None:
+        """The preset dropdown's choices: the folder is listed when the panel is made and
+        after a save, not on every parameter change."""
+        self._preset.options = tuple(self._sets.presets.names()) or (NO_CHOICE,)
 
     def _reset_one(self) -> None:
         if self._changed.value != NO_CHOICE:

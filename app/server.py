@@ -36,6 +36,7 @@ from core.params import Params
 log = logging.getLogger(__name__)
 
 DriveOpener = Callable[[Path], FrameSource]
+PARAMETER_SETS = ("A", "B")  # a client's engines are keyed (client id, set)
 
 
 def open_drive(path: Path) -> FrameSource:
@@ -153,7 +154,7 @@ class InspectorServer:
             session.close()
         for entry in drives:
             entry.worker.forget(client.client_id)
-            for which in ("A", "B"):
+            for which in PARAMETER_SETS:
                 entry.engines.forget((client.client_id, which))
 
     def _show_recording(self, session: ClientSession, name: str) -> None:
@@ -192,10 +193,11 @@ class InspectorServer:
             def render(client_id: int, state: ViewState) -> FrameView | Exception:
                 try:
                     index = state.frame
-                    result = engines.result((client_id, "A"), frames, state.params, index)
+                    a, b = PARAMETER_SETS
+                    result = engines.result((client_id, a), frames, state.params, index)
                     result_b = None
                     if state.params_b is not None:
-                        result_b = engines.result((client_id, "B"), frames, state.params_b, index)
+                        result_b = engines.result((client_id, b), frames, state.params_b, index)
                     return render_view(drive, state, result, frames.frame(index), result_b)
                 except RecordingError as err:  # a damaged frame: say so on the page
                     return err

@@ -88,8 +88,7 @@ class ClientSession:
         self._on_pick_recording = on_pick_recording
         self._can: CanSeries | None = None
         self._recent_timings: deque[StageTimings] = deque(maxlen=TIMINGS_WINDOW)
-        self._history = History()
-        self._param_sets = ParamSets(presets, self._history, self._set_params)
+        self._param_sets = ParamSets(presets, History(), self._set_params)
 
         gui = client.gui
         self._message = gui.add_markdown("", order=0)
@@ -195,7 +194,7 @@ class ClientSession:
             return
         duration_s = (frame_count - 1) / frame_rate_hz if frame_rate_hz > 0 else 0.0
         with gui.add_folder("Timeline", order=2) as self._timeline:
-            self._slider = gui.add_slider("frame", 0, max(frame_count - 1, 0), 1, 0)
+            self._add_frame_slider(())
             self._play = gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY)
             step_back = gui.add_button("Step -1", icon=viser.Icon.CHEVRON_LEFT)
             step_on = gui.add_button("Step +1", icon=viser.Icon.CHEVRON_RIGHT)
@@ -211,7 +210,6 @@ class ClientSession:
                 else None
             )
         )
-        self._slider.on_update(lambda event: self.go_to(event.target.value))
         self._metrics = MetricsPanel(
             gui,
             6,
@@ -467,17 +465,21 @@ class ClientSession:
             if old is None or timeline is None:
                 return
             with timeline:
-                self._slider = self.client.gui.add_slider(
-                    "frame",
-                    0,
-                    self._frame_count - 1,
-                    1,
-                    self._state.frame,
-                    marks=marks,
-                    order=old.order,
-                )
-            self._slider.on_update(lambda event: self.go_to(event.target.value))
+                self._add_frame_slider(marks, old.order)
             old.remove()
+
+    def _add_frame_slider(self, marks: tuple[SliderMark, ...], order: float | None = None) -> None:
+        """The timeline's frame slider at the current frame, in the current GUI container."""
+        self._slider = self.client.gui.add_slider(
+            "frame",
+            0,
+            max(self._frame_count - 1, 0),
+            1,
+            self._state.frame,
+            marks=marks or None,
+            order=order,
+        )
+        self._slider.on_update(lambda event: self.go_to(event.target.value))
 
     def _set_panels(self) -> None:
         stage = next(k for k, title in STAGE_TITLES.items() if title == self._stage_choice.value)
