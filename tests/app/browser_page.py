@@ -13,6 +13,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+from playwright.sync_api import Error as PlaywrightError
 from playwright.sync_api import Locator, Page
 
 from app.server import DriveOpener, InspectorServer, open_drive
@@ -30,6 +31,7 @@ CHROMIUM_ARGS = [
 ]
 SCREENSHOTS = Path(tempfile.gettempdir()) / "fusionscope-browser-tests"
 TIMEOUT_MS = 30_000
+PIXEL_READS = 5  # tries to read a picture the page may be replacing
 SETTLE_MS = 1_000  # longer than a seek's replay and render
 
 # The camera image: the first <img> viser fills from a blob with a rendered picture.
@@ -75,11 +77,20 @@ def camera_src(page: Page) -> str:
 
 
 def pixels(image: Locator) -> str:
-    """A digest of the decoded pixels of an <img>, to tell pictures apart (not their URLs)."""
-    image.evaluate("i => i.decode()")
+    """A digest of the decoded pixels of an <img>, to tell pictures apart (not their URLs).
+    A picture the page replaces while it is read (its blob URL revoked mid-decode) is read
+    again."""
+    for _ in range(PIXEL_READS - 1):
+        with contextlib.suppress(PlaywrightError):
+            return _digest(image)
+        image.page.wait_for_timeout(100)
+    return _digest(image)
+
+
+def _digest(image: Locator) -> str:
     return str(
         image.evaluate(
-            """i => { const c = document.createElement('canvas');
+            """async i => { await i.decode(); const c = document.createElement('canvas');
                 c.width = i.naturalWidth; c.height = i.naturalHeight;
                 const g = c.getContext('2d'); g.drawImage(i, 0, 0);
                 const d = g.getImageData(0, 0, c.width, c.height).data;
