@@ -26,12 +26,16 @@ from app.view import AB_GAP_PX
 from core.evaluation.evaluate import evaluate_recording
 from core.params import Params
 
+FOLDER_OPEN_MS = 600  # longer than a folder's unfolding animation
 XI = "threshold_xi"  # motion stereo's binarisation threshold (grey levels)
 
 
 def open_folders(page: Page, *names: str) -> None:
+    """Open GUI folders in turn, each after the one before has finished unfolding (a click
+    on a title that is still moving can miss it)."""
     for name in names:
         page.get_by_text(name, exact=True).first.click()
+        page.wait_for_timeout(FOLDER_OPEN_MS)
 
 
 def test_a_threshold_changes_the_binarised_image(recordings: Recordings, page: Page) -> None:
