@@ -15,7 +15,7 @@ from collections.abc import Hashable
 from dataclasses import dataclass
 
 from core.camera import CameraModel
-from core.engine import FrameResult, Frames, FusionEngine
+from core.engine import EngineState, FrameResult, Frames, FusionEngine
 from core.io.frame import FrameInput
 from core.params import Params
 
@@ -55,6 +55,9 @@ class FrameCache:
 class _Entry:
     engine: FusionEngine
     last: FrameResult | None = None
+    # the old parameters' state after the frame before a preview, for the next preview
+    # should the parameters change again before the engine has kept a state there
+    preview_from: EngineState | None = None
 
 
 class ClientEngines:
@@ -67,16 +70,30 @@ class ClientEngines:
         self._entries: dict[Hashable, _Entry] = {}
         self._lock = threading.Lock()
 
-    def result(self, key: Hashable, frames: Frames, params: Params, index: int) -> FrameResult:
+    def result(
+        self, key: Hashable, frames: Frames, params: Params, index: int, preview: bool = False
+    ) -> FrameResult:
         """Frame `index` of `frames` under `params` for client `key`: the last result again
         when nothing changed, else the engine's seek (a new engine when `params` changed).
-        Reader errors pass through."""
+
+        preview: when `params` changed and the old engine kept its state after frame
+        index - 1, the new engine's preview from that state (`FusionEngine.preview`, one
+        frame instead of a replay); the next call for the same frame and parameters gives
+        the exact result. Reader errors pass through."""
         with self._lock:
-            entry = self._entries.get(key)
+            old = self._entries.get(key)
+            entry = old
             if entry is None or entry.engine.params != params:
                 entry = self._entries[key] = _Entry(
                     FusionEngine(params, self.camera, keep_states=self.keep_states)
                 )
+        if preview and old is not entry and old is not None:
+            entry.preview_from = old.engine.kept_state(index - 1) or old.preview_from
+            if entry.preview_from is not None and entry.preview_from.last.index == index - 1:
+                try:
+                    return entry.engine.preview(entry.preview_from, frames.frame(index))
+                except ValueError:
+                    pass  # the state does not fit the new parameters: replay them
         if entry.last is not None and entry.last.index == index:
             return entry.last
         entry.last = None  # a failed seek leaves no stale result behind

@@ -194,10 +194,11 @@ class InspectorServer:
                 try:
                     index = state.frame
                     a, b = PARAMETER_SETS
-                    result = engines.result((client_id, a), frames, state.params, index)
+                    result = engines.result((client_id, a), frames, state.params, index, True)
                     result_b = None
                     if state.params_b is not None:
-                        result_b = engines.result((client_id, b), frames, state.params_b, index)
+                        params_b = state.params_b
+                        result_b = engines.result((client_id, b), frames, params_b, index, True)
                     return render_view(drive, state, result, frames.frame(index), result_b)
                 except RecordingError as err:  # a damaged frame: say so on the page
                     return err
@@ -217,7 +218,10 @@ class InspectorServer:
                 else:
                     session.show_view(name, view)
 
-            worker = RenderWorker(render, publish, name=f"render-{name}")
+            def again(view: FrameView | Exception) -> bool:
+                return isinstance(view, FrameView) and view.preview
+
+            worker = RenderWorker(render, publish, name=f"render-{name}", again=again)
             evaluate = None
             if drive.has_truth:
 

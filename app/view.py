@@ -90,7 +90,9 @@ class FrameView:
     side by side, (H + strip, 2 W + gap, 3), when comparing), the read-out line, set A's
     stage timings, the stage picture shown as (title, RGB image), and the markdown
     list of detections only A or only B has ("" when not comparing); the bird's-eye views
-    as (geometry, ground texture) for A, and B beside it, when that panel is on."""
+    as (geometry, ground texture) for A, and B beside it, when that panel is on; preview:
+    a result in it is the engine's preview (`FusionEngine.preview`), to be replaced by the
+    exact one."""
 
     frame: int
     image: draw.RgbImage
@@ -99,6 +101,10 @@ class FrameView:
     panels: tuple[tuple[str, draw.RgbImage], ...] = ()
     diff: str = ""
     bird_eyes: tuple[tuple[BirdEyeGeometry, draw.RgbImage], ...] = ()
+    preview: bool = False
+
+
+PREVIEW_NOTE = "preview: replaying under the new values"
 
 
 def readout_text(
@@ -153,6 +159,9 @@ def render_view(
         raise ValueError(f"result, frame: expected frame {state.frame}, got {indices}")
     t_s = (frame.t_ns - int(drive.times_ns[0])) / NS_PER_S
     text = readout_text(state.frame, len(drive), t_s, frame.speed_mps, frame.yaw_rate_radps)
+    preview = result.preview or (result_b is not None and result_b.preview)
+    if preview:
+        text += f" | {PREVIEW_NOTE}"
     picture = camera_picture(drive, state, result, frame)
     diff = ""
     if result_b is not None:
@@ -170,7 +179,14 @@ def render_view(
             offset = b_offset_y_m(state.params)
             bird_eyes += (bird_eye_view(result_b, state.params_b, offset),)
     return FrameView(
-        state.frame, picture, text, result.timings, stage_panels(result, state), diff, bird_eyes
+        state.frame,
+        picture,
+        text,
+        result.timings,
+        stage_panels(result, state),
+        diff,
+        bird_eyes,
+        preview,
     )
 
 

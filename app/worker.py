@@ -22,7 +22,9 @@ log = logging.getLogger(__name__)
 
 class RenderWorker(Generic[Key, Request, Result]):
     """Runs `render(key, request)` on a background thread, then `publish(key, request,
-    result)`.
+    result)`; when `again(result)` says so, the same request is rendered once more after
+    the others waiting (a preview followed by the exact result), unless a newer request for
+    its key came meanwhile.
 
     `submit(key, request)` never blocks; of the requests submitted for one key while the
     worker is busy only the last is rendered. Keys (clients) are served in the order their
@@ -35,9 +37,11 @@ class RenderWorker(Generic[Key, Request, Result]):
         render: Callable[[Key, Request], Result],
         publish: Callable[[Key, Request, Result], None],
         name: str = "render-worker",
+        again: Callable[[Result], bool] = lambda result: False,
     ) -> None:
         self._render = render
         self._publish = publish
+        self._again = again
         self._pending: dict[Key, Request] = {}
         self._wake = threading.Condition()
         self._stopping = False
@@ -76,6 +80,10 @@ class RenderWorker(Generic[Key, Request, Result]):
         while (job := self._next()) is not None:
             key, request = job
             try:
-                self._publish(key, request, self._render(key, request))
+                result = self._render(key, request)
+                self._publish(key, request, result)
+                if self._again(result):
+                    with self._wake:
+                        self._pending.setdefault(key, request)
             except Exception:  # a bad frame must not end the worker
                 log.exception("render of %r for %r failed", request, key)

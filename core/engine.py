@@ -17,7 +17,9 @@ memory, the previous frame's vehicle boxes, motion stereo's background and the t
 `process` expects frames in order; `seek(drive, index)` brings the engine to any frame of a
 drive: a frame a little ahead is reached by processing the frames in between (as playback
 skipping frames would), any other by resetting that state and replaying the
-`replay_window(params)` frames before it.
+`replay_window(params)` frames before it. `preview(state, frame)` runs one frame from a state
+an engine under other parameters kept: the inspector shows it at once when a parameter
+changes, while the exact seek under the new parameters replays the window.
 
 State snapshots (`keep_states`, for the inspector's scrubbing): after each frame it
 processes, an engine built with `keep_states > 0` keeps that cross-frame state under the
@@ -120,7 +122,7 @@ class FrameResult:
     the confirmed tracks of each kind; tracked_guard_rails: indices of this frame's radar
     targets labelled guard rail and associated with a confirmed guard-rail track;
     replayed: frames processed before this one to rebuild the state (0 when it followed
-    the previous frame).
+    the previous frame); preview: made by `preview`, from the state other parameters left.
     """
 
     index: int
@@ -135,6 +137,7 @@ class FrameResult:
     tracking: TrackResult
     timings: StageTimings
     replayed: int
+    preview: bool = False
 
     @property
     def tracked_vehicles(self) -> tuple[Track, ...]:
@@ -167,7 +170,7 @@ class _LastFrame:
 
 
 @dataclass(frozen=True, eq=False)
-class _EngineState:
+class EngineState:
     """The engine's cross-frame state after one frame, as `process` of the next reads it."""
 
     motion_stereo: MotionStereoState
@@ -239,7 +242,7 @@ class FusionEngine:
         self._pitch_memory: PitchMemory | None = None
         self._vehicle_boxes: tuple[Box, ...] = ()
         self._last: _LastFrame | None = None
-        self._states: OrderedDict[int, _EngineState] = OrderedDict()
+        self._states: OrderedDict[int, EngineState] = OrderedDict()
 
     @property
     def last_index(self) -> int | None:
@@ -267,7 +270,7 @@ class FusionEngine:
 
     def _keep(self, last: _LastFrame) -> None:
         """Keep the state after frame `last`, the most recently used."""
-        self._states[last.index] = _EngineState(
+        self._states[last.index] = EngineState(
             self._motion_stereo.state(),
             self._tracker.state(),
             self._pitch_memory,
@@ -278,10 +281,17 @@ class FusionEngine:
         while len(self._states) > self.keep_states:
             self._states.popitem(last=False)
 
+    def kept_state(self, index: int) -> EngineState | None:
+        """The state kept after frame `index` (None when none is), left where it is in the
+        least-recently-used order."""
+        return self._states.get(index)
+
     def _restore(self, index: int) -> None:
         """Take up the state kept after frame `index`, now the most recently used."""
-        state = self._states[index]
         self._states.move_to_end(index)
+        self._take_up(self._states[index])
+
+    def _take_up(self, state: EngineState) -> None:
         self._motion_stereo.restore(state.motion_stereo)
         self._tracker.restore(state.tracker)
         self._pitch_memory = state.pitch_memory
@@ -326,10 +336,39 @@ class FusionEngine:
         result = self.process(wanted)
         return replace(result, replayed=index - first)
 
+    def preview(self, state: EngineState, frame: FrameInput) -> FrameResult:
+        """`frame` processed on from `state`, which an engine under other parameters kept
+        after the frame before it: what the inspector shows at once when a parameter
+        changes, while `seek` replays the window under the new parameters.
+
+        This frame's stages run under this engine's parameters; what they read of earlier
+        frames (motion stereo's background, the pitch memory, the previous vehicle boxes,
+        the tracks) is what the old parameters made, so the result is exact only where the
+        change does not reach that state. The engine forgets its cross-frame state (the
+        next `seek` starts over) and keeps no state of the preview. ValueError when
+        `frame` does not follow `state`, or the state does not fit this engine's
+        parameters (another bird's-eye grid, another pitch row step)."""
+        if frame.index != state.last.index + 1:
+            raise ValueError(
+                f"frame: expected frame {state.last.index + 1}, which follows the state, "
+                f"got frame {frame.index}"
+            )
+        try:
+            self._take_up(state)
+            return replace(self._process(frame), preview=True)
+        finally:
+            self._start_over()
+
     def process(self, frame: FrameInput) -> FrameResult:
         """One frame, the stages in the paper's order (module docstring). A frame that does
         not follow the last one (its index is not the next) starts over without history
         (the kept states stay)."""
+        result = self._process(frame)
+        if self.keep_states and self._last is not None:
+            self._keep(self._last)
+        return result
+
+    def _process(self, frame: FrameInput) -> FrameResult:
         if self._last is not None and frame.index != self._last.index + 1:
             self._start_over()
         p = self.params
@@ -372,8 +411,6 @@ class FusionEngine:
         self._pitch_memory = pitch.memory
         self._vehicle_boxes = boxes
         self._last = _LastFrame(frame.index, frame.t_ns)
-        if self.keep_states:
-            self._keep(self._last)
         return FrameResult(
             index=frame.index,
             t_ns=frame.t_ns,

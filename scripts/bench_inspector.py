@@ -67,6 +67,7 @@ from typing import IO, Any
 
 from playwright.sync_api import Browser, Locator, Page, ViewportSize, sync_playwright
 
+from app.view import PREVIEW_NOTE
 from core.cli import DEFAULT_RECORDING, DEFAULT_RECORDINGS, ProgressBar
 from core.params import Params
 
@@ -110,7 +111,10 @@ HARNESS_JS = r"""
 (() => {
   if (window.__bench) return;
   const tracked = new WeakMap(); // <img> -> {src, tSet, tDecoded}
-  let armed = false, t0 = null, expect = null, done = null, waiter = null;
+  let armed = false, t0 = null, expect = null, absent = null, done = null, waiter = null;
+  // ms from t0 until every visible picture was first replaced and decoded, and until the
+  // batch with those pictures reached the page
+  let first = null, firstArrived = null;
   let play = null; // the playback being counted: {decodes: [times], restarts}
   const batches = []; // when viser's websocket worker handed the page a batch with an image
 
@@ -153,10 +157,13 @@ HARNESS_JS = r"""
       if (!e || e.src !== img.src || e.tSet < t0 || e.tDecoded === null) return;
       t1 = Math.max(t1, e.tDecoded);
     }
-    if (expect !== null && !readoutShows(expect)) return;
-    armed = false;
     const arrived = batches.filter((t) => t >= t0 && t <= t1).at(-1) ?? NaN;
-    done = {ok: true, ms: t1 - t0, arrived_ms: arrived - t0, images: imgs.length, reason: ""};
+    if (first === null) [first, firstArrived] = [t1 - t0, arrived - t0];
+    if (expect !== null && !readoutShows(expect)) return;
+    if (absent !== null && readoutShows(absent)) return;
+    armed = false;
+    done = {ok: true, ms: t1 - t0, arrived_ms: arrived - t0, first_ms: first,
+            first_arrived_ms: firstArrived, images: imgs.length, reason: ""};
     finish();
   }
   function track(img) {
@@ -198,8 +205,11 @@ HARNESS_JS = r"""
 
   window.__bench = {
     // Before an action: the next input event starts it; `text` (or null): the read-out
-    // must show it too.
-    arm(text) { armed = true; t0 = null; done = null; expect = text; },
+    // must show it too; `without` (or null): the read-out must no longer show it.
+    arm(text, without) {
+      armed = true; t0 = null; done = null; first = firstArrived = null;
+      expect = text; absent = without;
+    },
     // After an action: {ok, ms, images, reason}, a miss after timeoutMs.
     wait(timeoutMs) {
       return new Promise((resolve) => {
@@ -208,8 +218,11 @@ HARNESS_JS = r"""
           armed = false;
           const why = t0 === null ? "no input event seen"
             : expect !== null && !readoutShows(expect) ? "read-out never showed " + expect
+            : absent !== null && readoutShows(absent) ? "read-out still showed " + absent
             : "not every visible image was replaced and decoded";
-          resolve({ok: false, ms: NaN, arrived_ms: NaN, images: shown().length, reason: why});
+          resolve({ok: false, ms: NaN, first_ms: first ?? NaN,
+                   first_arrived_ms: firstArrived ?? NaN, arrived_ms: NaN,
+                   images: shown().length, reason: why});
         }, timeoutMs);
         waiter = [resolve, timer];
         check();
@@ -564,10 +577,16 @@ def parameter_field(page: Page, stage: str, name: str) -> Locator:
 
 
 def timed(
-    page: Page, act: Callable[[], None], timeout_ms: float, readout: str | None
+    page: Page,
+    act: Callable[[], None],
+    timeout_ms: float,
+    readout: str | None,
+    without: str | None = None,
 ) -> dict[str, Any]:
-    """Arm the harness, act, and wait for the page's verdict on the action."""
-    page.evaluate("text => window.__bench.arm(text)", readout)
+    """Arm the harness, act, and wait for the page's verdict on the action: every visible
+    picture replaced and decoded, the read-out showing `readout` and not `without` (each
+    when given). The outcome's `first_ms` is when the pictures were first all replaced."""
+    page.evaluate("([text, without]) => window.__bench.arm(text, without)", [readout, without])
     act()
     outcome: dict[str, Any] = page.evaluate("ms => window.__bench.wait(ms)", timeout_ms)
     if not outcome["ok"]:
@@ -633,19 +652,31 @@ def move_values() -> tuple[str, str]:
 
 def moves(
     page: Page, count: int, timeout_ms: float, after_each: Callable[[int, int], None]
-) -> Latencies:
-    """Parameter changes, each to the other of two values; then back to the paper's value."""
-    result = Latencies("parameter change -> panels", MOVE_P95_TARGET_MS)
+) -> tuple[Latencies, Latencies]:
+    """Parameter changes, each to the other of two values; then back to the paper's value.
+
+    Two figures: until every visible picture first shows the new value (the server's
+    preview of the frame when it has one, `FusionEngine.preview`), and until they show the
+    exact result (the read-out no longer says preview)."""
+    first = Latencies("parameter change -> panels", MOVE_P95_TARGET_MS)
+    exact = Latencies("  ... -> exact (replayed)", MOVE_P95_TARGET_MS)
     select_stage(page, STAGE)
     box = parameter_field(page, *MOVE_PARAMETER)
     paper, other = move_values()
     for i in range(count):
         text = paper if float(box.input_value()) == float(other) else other
-        result.add(timed(page, functools.partial(type_value, box, text), timeout_ms, None))
+        act = functools.partial(type_value, box, text)
+        outcome = timed(page, act, timeout_ms, None, PREVIEW_NOTE)
+        exact.add(outcome)
+        first_ms = outcome["first_ms"]
+        if first_ms is None or not math.isfinite(first_ms):
+            first.add({"ok": False, "reason": outcome["reason"]})
+        else:
+            first.add({"ok": True, "ms": first_ms, "arrived_ms": outcome["first_arrived_ms"]})
         after_each(i + 1, count)
     if float(box.input_value()) != float(paper):  # untimed
-        timed(page, functools.partial(type_value, box, paper), timeout_ms, None)
-    return result
+        timed(page, functools.partial(type_value, box, paper), timeout_ms, None, PREVIEW_NOTE)
+    return first, exact
 
 
 def play(page: Page, seconds: float) -> dict[str, Any]:
@@ -702,7 +733,7 @@ def warm_up(page: Page, box: Locator, frames: int, rng: random.Random, count: in
         target = rng.choice([f for f in range(frames) if f != current])
         _needed(seek(page, box, target, FIRST_IMAGE_MS), f"warm-up: seeking to frame {target}")
     show_frame(page, box, frames // 2)
-    changes = moves(page, WARMUP_MOVES, FIRST_IMAGE_MS, lambda done, total: None)
+    _, changes = moves(page, WARMUP_MOVES, FIRST_IMAGE_MS, lambda done, total: None)
     if changes.misses:
         raise RuntimeError(f"warm-up: parameter changes: {changes.miss_reasons}")
     select_stage(page, STAGE)
@@ -795,7 +826,7 @@ def run(options: argparse.Namespace) -> Report:
         options.recording,
         frames,
         frame_rate_hz,
-        [move_figures, seek_figures],
+        [*move_figures, seek_figures],
         shown,
         rss,
         server.pid,

@@ -59,9 +59,9 @@ def test_tiny_run_prints_finite_figures_and_stops_its_server(
 
     table, _, doc = out.partition("\n{")
     summary = json.loads("{" + doc)
-    for name in ("seek to a random frame", "parameter change -> panels"):
+    for name in ("seek to a random frame", "parameter change -> panels", "-> exact (replayed)"):
         assert name in table
-    assert [lat["count"] for lat in summary["latency"]] == [3, 3]
+    assert [lat["count"] for lat in summary["latency"]] == [3, 3, 3]
     # a miss would print as null (no latency): every action finished
     assert all(math.isfinite(x) for x in numbers(summary["latency"])), summary["latency"]
     # one tab (its Camera and Motion stereo tabs), two with one idle, both playing (+ mean)

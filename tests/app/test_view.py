@@ -89,6 +89,23 @@ def test_an_engine_per_client_and_the_last_result_again_for_a_redraw() -> None:
     assert again.replayed == 6 and again is not first  # new parameters: replayed
 
 
+def test_new_parameters_give_a_preview_then_the_exact_replay() -> None:
+    drive = FakeDrive(frames=10)
+    engines = ClientEngines(drive.camera)
+    engines.result("a", drive, Params(), 6)
+    changed = Params().with_value("pitch.lines_kept", 3)
+    preview = engines.result("a", drive, changed, 6, preview=True)
+    assert preview.preview and preview.replayed == 0  # from the state after 5
+    changed_again = Params().with_value("pitch.lines_kept", 4)  # before the exact one
+    assert engines.result("a", drive, changed_again, 6, preview=True).preview
+    exact = engines.result("a", drive, changed_again, 6, preview=True)
+    assert not exact.preview and exact.replayed == 6
+    assert engines.result("a", drive, changed_again, 6, preview=True) is exact
+    # no kept state before the frame (the first frame), or no preview asked: the replay
+    assert not engines.result("a", drive, changed, 0, preview=True).preview
+    assert not engines.result("a", drive, Params(), 6).preview
+
+
 def test_a_scrub_back_takes_up_the_state_the_engine_kept() -> None:
     drive = FakeDrive(frames=10)
     engines = ClientEngines(drive.camera)

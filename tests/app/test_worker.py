@@ -61,6 +61,32 @@ def test_each_client_gets_its_own_newest_request() -> None:
         worker.stop()
 
 
+def test_a_result_asking_again_is_rendered_again_unless_a_newer_request_came() -> None:
+    rec = Recorder()
+    rec.release.set()
+    # like a preview: the first render of a request asks for another
+    worker = RenderWorker(rec.render, rec.publish, again=lambda result: len(rec.rendered) == 1)
+    try:
+        worker.submit("tab", 1)
+        assert rec.done.acquire(timeout=5.0) and rec.done.acquire(timeout=5.0)
+        assert rec.published == [("tab", 1, "image 1")] * 2  # the preview, then once more...
+        assert not rec.done.acquire(timeout=0.2)  # ...and no more
+    finally:
+        worker.stop()
+    rec = Recorder()
+    worker = RenderWorker(rec.render, rec.publish, again=lambda result: len(rec.rendered) == 1)
+    try:
+        worker.submit("tab", 1)
+        assert rec.started.wait(5.0)
+        worker.submit("tab", 2)  # newer, while 1 renders
+        rec.release.set()
+        assert rec.done.acquire(timeout=5.0) and rec.done.acquire(timeout=5.0)
+        assert rec.rendered == [1, 2]
+        assert not rec.done.acquire(timeout=0.2)
+    finally:
+        worker.stop()
+
+
 def test_a_failing_render_does_not_end_the_worker() -> None:
     published: list[int] = []
     rendered: list[int] = []

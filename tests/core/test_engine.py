@@ -246,6 +246,35 @@ def test_a_state_kept_before_the_window_is_not_used() -> None:
         assert engine.seek(drive, far).replayed == window
 
 
+def test_a_preview_runs_this_frame_on_the_state_other_parameters_kept() -> None:
+    played = _playback(SEEK_DRIVE)
+    wider = Params().with_value("vehicle.min_width_m", 2.9)  # wider than any car here
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        engine = FusionEngine(Params(), drive.camera, keep_states=KEEP)
+        for i in range(31):
+            engine.seek(drive, i)
+        state = engine.kept_state(29)
+        assert state is not None and engine.kept_state(31) is None
+        # under the same parameters a preview is the frame played from that state
+        same = FusionEngine(Params(), drive.camera, keep_states=KEEP)
+        preview = same.preview(state, drive.frame(30))
+        assert preview.preview and not played[30].preview
+        _assert_same(preview, played[30])
+        assert same.last_index is None and same.kept_states == ()  # nothing of it is kept
+        # under other parameters this frame's stages use them
+        assert played[30].vehicle.vehicles
+        assert all(v.width_m < 2.9 for v in played[30].vehicle.vehicles)
+        other = FusionEngine(wider, drive.camera).preview(state, drive.frame(30))
+        assert other.vehicle.vehicles == ()
+        assert other.pitch.pitch_rad == played[30].pitch.pitch_rad
+        assert engine.seek(drive, 30).replayed == 0  # the state is still kept, unchanged
+        with pytest.raises(ValueError, match="expected frame 30, which follows the state, got"):
+            FusionEngine(Params(), drive.camera).preview(state, drive.frame(31))
+        coarser = Params().with_value("motion_stereo.cell_m", 2 * Params().motion_stereo.cell_m)
+        with pytest.raises(ValueError, match=r"state\.background"):  # another grid
+            FusionEngine(coarser, drive.camera).preview(state, drive.frame(30))
+
+
 @pytest.mark.parametrize("keep", [-1, 1.5, True])
 def test_bad_keep_states_is_refused_by_name(keep: object) -> None:
     with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
