@@ -67,6 +67,7 @@ from typing import IO, Any
 
 from playwright.sync_api import Browser, Locator, Page, ViewportSize, sync_playwright
 
+from app.session import PANEL_LABELS
 from app.view import PREVIEW_NOTE
 from core.cli import DEFAULT_RECORDING, DEFAULT_RECORDINGS, ProgressBar
 from core.params import Params
@@ -519,13 +520,22 @@ class Report:
 
 
 # --- the page -------------------------------------------------------------------------------
-def open_tab(browser: Browser, url: str) -> Page:
-    """A fresh browser context on the inspector, its first picture shown."""
+def open_tab(browser: Browser, url: str, bird_eye: bool = True) -> Page:
+    """A fresh browser context on the inspector, its first picture shown; the 3D
+    bird's-eye view switched off in the Panels folder unless `bird_eye`."""
     context = browser.new_context(viewport=VIEWPORT)
     context.add_init_script(HARNESS_JS)
     page = context.new_page()
     page.goto(url)
     page.wait_for_function("() => window.__bench.ready()", timeout=FIRST_IMAGE_MS)
+    if not bird_eye:
+        page.get_by_text("Panels", exact=True).click()
+        switch = page.get_by_label(PANEL_LABELS["bird_eye"], exact=True)
+        switch.click()
+        if switch.is_checked():
+            raise RuntimeError("the bird's-eye view switch did not turn off")
+        page.get_by_text("Panels", exact=True).click()
+        page.wait_for_function("() => window.__bench.ready()", timeout=UI_TIMEOUT_MS)
     return page
 
 
@@ -740,10 +750,16 @@ def warm_up(page: Page, box: Locator, frames: int, rng: random.Random, count: in
 
 
 def playbacks(
-    browser: Browser, page: Page, url: str, seconds: float, tabs: int, say: Callable[[str], None]
+    browser: Browser,
+    page: Page,
+    url: str,
+    seconds: float,
+    tabs: int,
+    bird_eye: bool,
+    say: Callable[[str], None],
 ) -> list[Playback]:
-    """Frames/s shown in `page` (camera, stage picture and bird's-eye view): alone, then with
-    `tabs - 1` more tabs, idle, then all playing."""
+    """Frames/s shown in `page` (camera, stage picture and, if `bird_eye`, the bird's-eye
+    view): alone, then with `tabs - 1` more tabs, idle, then all playing."""
     say(f"playback at {PLAY_RATE}, {seconds:g} s per figure")
     set_rate(page, PLAY_RATE)
     shown: list[Playback] = []
@@ -752,7 +768,7 @@ def playbacks(
     if tabs < 2:
         return shown
     say(f"opening {tabs - 1} more tabs")
-    others = [open_tab(browser, url) for _ in range(tabs - 1)]
+    others = [open_tab(browser, url, bird_eye) for _ in range(tabs - 1)]
     page.bring_to_front()
     say(f"playback in 1 of {tabs} tabs, then in all")
     shown.append(Playback.of(f"{tabs} tabs, {tabs - 1} idle", play(page, seconds)))
@@ -796,7 +812,7 @@ def run(options: argparse.Namespace) -> Report:
         browser = pw.chromium.launch(executable_path=str(options.chromium), args=CHROMIUM_ARGS)
         try:
             say(f"server pid {server.pid} on {server.url}; waiting for the first picture")
-            page = open_tab(browser, server.url)
+            page = open_tab(browser, server.url, not options.no_bird_eye)
             frames, frame_rate_hz = drive_size(page)
             if frames < 2:
                 raise RuntimeError(f"{options.recording}: {frames} frame(s), nothing to seek to")
@@ -815,7 +831,15 @@ def run(options: argparse.Namespace) -> Report:
             move_figures = moves(page, options.moves, options.timeout_ms, each)
             rss["after moves"] = rss_kib(server.pid)
 
-            shown = playbacks(browser, page, server.url, options.play_s, options.tabs, say)
+            shown = playbacks(
+                browser,
+                page,
+                server.url,
+                options.play_s,
+                options.tabs,
+                not options.no_bird_eye,
+                say,
+            )
             rss["at the end"] = rss_kib(server.pid)
             machine = machine_info(browser.version, load_at_start)
         finally:
@@ -857,6 +881,8 @@ def format_report(summary: dict[str, Any], options: argparse.Namespace) -> str:
         f"machine: {m['cpus']} CPUs, Python {m['python']}, Chromium {m['chromium']}; "
         f"load average (1, 5, 15 min) {_loads(m['load_average_at_start'])} at the start, "
         f"{_loads(m['load_average_at_end'])} at the end",
+        "panels: camera, motion stereo picture, "
+        + ("no bird's-eye view (--no-bird-eye)" if options.no_bird_eye else "3D bird's-eye view"),
         "",
         "latency, input event -> every visible picture replaced and decoded (ms; a miss is "
         f"no picture within {options.timeout_ms:g} ms)",
@@ -978,6 +1004,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--seed", type=int, default=0, help="seed of the seek targets")
     parser.add_argument("--chromium", type=Path, default=CHROMIUM, help=f"default: {CHROMIUM}")
+    parser.add_argument(
+        "--no-bird-eye",
+        action="store_true",
+        help="measure with the 3D bird's-eye view switched off (Panels folder) in every tab",
+    )
     parser.add_argument("--json", action="store_true", help="also print the figures as JSON")
     parser.add_argument("--no-progress", action="store_true", help="no progress on stderr")
     return parser
