@@ -10,6 +10,7 @@ total's events are the sum of the recordings'.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -147,7 +148,11 @@ class _Scorer:
                 i, truth.objects, frame.radar, result.areas, _track_estimates(result), tolerance
             )
         )
-        rails_m = objects.rails_on_road_m(truth, result.camera.with_pitch(truth.pitch_rad))
+        # the true pitch when the truth has one (NaN on annotated drives: the detected one)
+        camera = result.camera
+        if not math.isnan(truth.pitch_rad):
+            camera = camera.with_pitch(truth.pitch_rad)
+        rails_m = objects.rails_on_road_m(truth, camera)
         checked = [c.target_index for c in result.guardrail.checks]
         self.rails.append(
             objects.score_rails(

@@ -312,6 +312,10 @@ class PitchScore:
 
 
 def score_pitch(pitch_rad: float, true_pitch_rad: float, calibrated_rad: float) -> PitchScore:
+    """One frame's pitch errors; none when the truth has no pitch (NaN: an annotated real
+    drive, `core.annotation.truth`)."""
+    if math.isnan(true_pitch_rad):
+        return PitchScore()
     return PitchScore(
         (math.degrees(pitch_rad - true_pitch_rad),),
         (math.degrees(calibrated_rad - true_pitch_rad),),
