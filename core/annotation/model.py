@@ -375,7 +375,15 @@ class Annotations:
         _check_frame("last", last)
         if last < first:
             raise ValueError(f"last: expected a frame >= first ({first}), got {last}")
-        frames = {f for a, b in self.annotated for f in range(a, b + 1)}
-        span = set(range(first, last + 1))
-        frames = frames | span if on else frames - span
-        return replace(self, annotated=_merged((f, f) for f in frames))
+        kept: list[tuple[int, int]] = []
+        for a, b in self.annotated:  # on ranges, not frame sets: a range may be long
+            if on or b < first or a > last:
+                kept.append((a, b))
+                continue
+            if a < first:
+                kept.append((a, first - 1))
+            if b > last:
+                kept.append((last + 1, b))
+        if on:
+            kept.append((first, last))
+        return replace(self, annotated=_merged(kept))
