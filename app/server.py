@@ -27,6 +27,7 @@ from app.session import ClientSession
 from app.state import ViewState
 from app.view import CanSeries, FrameSource, FrameView, can_series, render_view
 from app.worker import RenderWorker
+from core.annotation.store import AnnotationStore
 from core.engine import FusionEngine
 from core.evaluation.evaluate import RecordingReport, evaluate_recording
 from core.io import Drive
@@ -52,6 +53,7 @@ class _OpenDrive:
     worker: RenderWorker[int, ViewState, FrameView | Exception]
     can: CanSeries | None
     evaluate: Evaluate | None  # the whole drive scored under some parameters; None: no truth
+    annotations: AnnotationStore | None  # None: the recording is not a folder of ours
 
 
 class InspectorServer:
@@ -127,6 +129,8 @@ class InspectorServer:
         for entry in drives:
             entry.worker.stop()
             entry.drive.close()
+            if entry.annotations is not None:
+                entry.annotations.close()
         if self._server is not None:
             self._server.stop()
             self._server = None
@@ -178,6 +182,7 @@ class InspectorServer:
             entry.drive.notes,
             entry.can,
             entry.evaluate,
+            entry.annotations,
         )
 
     # --- drives -------------------------------------------------------------------------
@@ -222,17 +227,29 @@ class InspectorServer:
                 return isinstance(view, FrameView) and view.preview
 
             worker = RenderWorker(render, publish, name=f"render-{name}", again=again)
+            annotations = _open_annotations(drive.path)
             evaluate = None
-            if drive.has_truth:
+            editable = annotations is not None and annotations.read_only_reason is None
+            if drive.has_truth or editable:
 
                 def evaluate(
                     params: Params, progress: Callable[[int, int], None]
                 ) -> RecordingReport:
                     return evaluate_recording(drive.path, params, progress, timing=False)
 
-            entry = _OpenDrive(drive, engines, worker, can_series(drive), evaluate)
+            entry = _OpenDrive(drive, engines, worker, can_series(drive), evaluate, annotations)
             self._drives[name] = entry
             return entry
+
+
+def _open_annotations(path: Path) -> AnnotationStore | None:
+    """The annotation store of the recording at `path` (read-only, with its reason, when its
+    file cannot be edited); None when it cannot be opened at all."""
+    try:
+        return AnnotationStore.open(path)
+    except (RecordingError, OSError):
+        log.warning("the annotations of %s cannot be opened", path, exc_info=True)
+        return None
 
 
 def serve(

@@ -17,6 +17,7 @@ from dataclasses import replace
 import viser
 import viser.uplot
 
+from app.annotate import AnnotationPanel
 from app.bird_eye import BirdEyeScene, top_down_view
 from app.history import History
 from app.metrics import SliderMark
@@ -35,6 +36,7 @@ from app.view import (
     median_timings,
     timings_markdown,
 )
+from core.annotation.store import AnnotationStore
 from core.engine import StageTimings
 from core.params import ParamsError
 
@@ -47,6 +49,7 @@ LAYER_LABELS = {**OVERLAY_OF_LAYER, "truth": "ground truth"}
 PANEL_LABELS = {"bird_eye": "bird's-eye view (3D)", "can": "CAN speed and yaw rate"}
 # the right-hand panel, top to bottom
 CAMERA_ORDER, DIFF_ORDER, STAGE_CHOICE_ORDER, STAGE_ORDER, CAN_ORDER = range(5)
+ANNOTATION_ORDER = 6.5  # the Annotation folder: after Metrics (6), before Keys (7)
 TIMINGS_WINDOW = 50  # frames in the running median of the stage timings
 NOTICE_SECONDS = 8.0
 
@@ -88,7 +91,8 @@ class ClientSession:
         self._on_pick_recording = on_pick_recording
         self._can: CanSeries | None = None
         self._recent_timings: deque[StageTimings] = deque(maxlen=TIMINGS_WINDOW)
-        self._param_sets = ParamSets(presets, History(), self._set_params)
+        self._history = History()  # parameter changes and annotation edits, one stack
+        self._param_sets = ParamSets(presets, self._history, self._set_params)
 
         gui = client.gui
         self._message = gui.add_markdown("", order=0)
@@ -121,6 +125,9 @@ class ClientSession:
         for box in self._panel_boxes.values():
             box.on_update(lambda _: self._set_panels())
         self._params_panel = ParamsPanel(gui, self._param_sets, self.notify, order=5)
+        self._annotation = AnnotationPanel(
+            client, self._history, self.notify, ANNOTATION_ORDER, self._set_annotating
+        )
         self._add_commands(gui)
 
         gui.main_panel.dock_left()
@@ -169,12 +176,14 @@ class ClientSession:
         notes: Sequence[str] = (),
         can: CanSeries | None = None,
         evaluate: Evaluate | None = None,
+        annotations: AnnotationStore | None = None,
     ) -> None:
         """Build the timeline for a drive of `frame_count` frames and render its first frame.
 
         notes: what the viewer should know about the recording (assumptions, what was skipped
         on reading), listed under its name. can: its CAN signals for the plot. evaluate:
         scores the whole drive under some parameters (None: the drive has no ground truth).
+        annotations: the recording's annotation store (None: it cannot be annotated).
         """
         self._drop_drive()
         gui = self.client.gui
@@ -186,6 +195,7 @@ class ClientSession:
             self._state = replace(self._state, frame=0, playing=False)
             self._can = can
             self._recent_timings.clear()
+        self._annotation.open(annotations)
         self._camera_panel.visible = True
         self._message.content = (
             f"**{_escape_markdown(name)}** — {frame_count} frames at {frame_rate_hz:.1f} Hz"
@@ -243,6 +253,8 @@ class ClientSession:
             self._show_stage(view)
             self._show_bird_eyes(view)
             self._readout.content = f"`{view.readout}`"
+        if view.annotation is not None:
+            self._annotation.show_frame(view.frame, *view.annotation)
 
     def _show_can(self, frame: int) -> None:
         """The CAN plot around `frame` (removed when switched off; none without CAN)."""
@@ -395,8 +407,8 @@ class ClientSession:
             ("Step on one frame", "arrowright", None, functools.partial(self.step, +1)),
             ("Go to the first frame", "home", None, functools.partial(self.go_to, 0)),
             ("Go to the last frame", "end", None, self._go_to_end),
-            ("Undo a parameter change", "Z", "cmd/ctrl", self._undo),
-            ("Redo a parameter change", "Z", "cmd/ctrl+shift", self._redo),
+            ("Undo (parameters and annotations)", "Z", "cmd/ctrl", self._undo),
+            ("Redo (parameters and annotations)", "Z", "cmd/ctrl+shift", self._redo),
             ("Compare with B on / off", "C", None, self._toggle_comparing),
             ("Swap A and B", "S", None, functools.partial(self._guarded, sets.swap)),
         ]
@@ -430,12 +442,17 @@ class ClientSession:
             self.notify("Not possible", str(err))
 
     def _undo(self) -> None:
-        if self._param_sets.undo() is None:
-            self.notify("Nothing to undo", "no parameter change left to undo", "gray")
+        if self._history.undo() is None:
+            self.notify("Nothing to undo", "no parameter change or annotation left to undo", "gray")
 
     def _redo(self) -> None:
-        if self._param_sets.redo() is None:
-            self.notify("Nothing to redo", "no undone parameter change to redo", "gray")
+        if self._history.redo() is None:
+            self.notify("Nothing to redo", "nothing undone to redo", "gray")
+
+    def _set_annotating(self, on: bool) -> None:
+        with self._lock:
+            self._state = replace(self._state, annotating=on)
+        self._submit()
 
     def _toggle_comparing(self) -> None:
         self._param_sets.set_comparing(self._param_sets.sets.b is None)

@@ -57,8 +57,8 @@ class Panels:
 @dataclass(frozen=True)
 class ViewState:
     """Per-client view: frame index into the drive, playback flag, overlay layers, panels,
-    the parameters the engine runs with, and a second set B to compare with (None: no
-    comparison)."""
+    the parameters the engine runs with, a second set B to compare with (None: no
+    comparison), and whether the tab annotates (its pictures then include the bare frame)."""
 
     frame: int = 0
     playing: bool = False
@@ -66,6 +66,7 @@ class ViewState:
     params: Params = field(default_factory=Params)
     panels: Panels = field(default_factory=Panels)
     params_b: Params | None = None
+    annotating: bool = False
 
     def __post_init__(self) -> None:
         if self.frame < 0:

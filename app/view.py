@@ -21,10 +21,11 @@ import numpy as np
 import numpy.typing as npt
 
 from app import draw, overlays, panels
+from app.annotation_view import SEED_KINDS, Seeds
 from app.bird_eye import BirdEyeGeometry, bird_eye_geometry
 from app.state import Layers, ViewState
 from core.camera import CameraModel
-from core.compare import Detection, diff_detections
+from core.compare import Detection, detections, diff_detections
 from core.engine import FrameResult, StageTimings
 from core.io.frame import FrameInput
 from core.io.groundtruth import FrameTruth
@@ -92,7 +93,8 @@ class FrameView:
     list of detections only A or only B has ("" when not comparing); the bird's-eye views
     as (geometry, ground texture) for A, and B beside it, when that panel is on; preview:
     a result in it is the engine's preview (`FusionEngine.preview`), to be replaced by the
-    exact one."""
+    exact one; annotation: when the tab annotates, the bare frame as RGB and what the
+    engine found on it under A, to seed annotations from."""
 
     frame: int
     image: draw.RgbImage
@@ -102,6 +104,7 @@ class FrameView:
     diff: str = ""
     bird_eyes: tuple[tuple[BirdEyeGeometry, draw.RgbImage], ...] = ()
     preview: bool = False
+    annotation: tuple[draw.RgbImage, Seeds] | None = None
 
 
 PREVIEW_NOTE = "preview: replaying under the new values"
@@ -178,6 +181,9 @@ def render_view(
         if result_b is not None and state.params_b is not None:
             offset = b_offset_y_m(state.params)
             bird_eyes += (bird_eye_view(result_b, state.params_b, offset),)
+    annotation = None
+    if state.annotating:
+        annotation = (draw.grey_to_rgb(frame.image), seeds(result))
     return FrameView(
         state.frame,
         picture,
@@ -187,7 +193,16 @@ def render_view(
         diff,
         bird_eyes,
         preview,
+        annotation,
     )
+
+
+def seeds(result: FrameResult) -> Seeds:
+    """What annotation can take from a frame's result: its vehicles and kept pedestrians
+    (`core.compare.detections`) and each searched radar target's base point and distance."""
+    boxes = tuple((d.kind, d.box_px) for d in detections(result) if d.kind in SEED_KINDS)
+    bases = tuple((a.base_px[0], a.base_px[1], a.target.x_m) for a in result.areas)
+    return Seeds(result.index, boxes, bases)
 
 
 def bird_eye_view(

@@ -9,7 +9,8 @@ with the drive's calibrated camera on a flat road, the papers' own assumption:
   level. A box whose bottom is at or above the horizon has no position (NaN) and is not a
   framed vehicle.
 - size_m: width and height from the box's size in pixels at that depth in front of the
-  camera (depth / fx and depth / fy metres per pixel, the camera looking ahead); length the class's typical length (TYPICAL_LENGTH_M).
+  camera (depth / fx and depth / fy metres per pixel, the camera looking ahead); length
+  the class's typical length (TYPICAL_LENGTH_M).
 - velocity_mps: unknown (NaN): motion stereo's scoring with the car standing still counts
   only moving objects, so it counts no annotated one then.
 - occlusion: OCCLUDED_FRACTION when the occluded attribute is on, else 0; radar_seen: the
@@ -22,14 +23,19 @@ with the drive's calibrated camera on a flat road, the papers' own assumption:
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 
 from core.annotation.model import Annotations, Box, Shown
+from core.annotation.store import EXACT_TRUTH_VERSION, GROUNDTRUTH_NAME, read_annotations
 from core.camera import CameraModel
-from core.io.groundtruth import FrameTruth, TruthGuardRail, TruthObject
+from core.io.errors import RecordingError
+from core.io.groundtruth import FrameTruth, TruthGuardRail, TruthObject, read_groundtruth
 
 # typical lengths of the classes (m), for the footprint behind a box's near face
 TYPICAL_LENGTH_M = {
@@ -88,7 +94,7 @@ def guard_rail(camera: CameraModel, shown: Shown) -> TruthGuardRail:
 
 
 def frame_truths(
-    annotations: Annotations, camera: CameraModel, times_ns: Sequence[int]
+    annotations: Annotations, camera: CameraModel, times_ns: Sequence[int] | npt.NDArray[np.int64]
 ) -> dict[int, FrameTruth]:
     """The FrameTruth of every annotated frame of a drive with these frame times (ns),
     by frame index; frames marked annotated beyond the drive are left out."""
@@ -104,3 +110,42 @@ def frame_truths(
                 guard_rails=tuple(guard_rail(camera, s) for s in shown if s.cls == "guard_rail"),
             )
     return out
+
+
+def recording_truth(
+    folder: Path,
+    named: Path | None,
+    camera: CameraModel,
+    times_ns: Sequence[int] | npt.NDArray[np.int64],
+) -> tuple[dict[int, FrameTruth], str | None]:
+    """A recording's ground truth by frame index, and why there is none when its file could
+    not be used (None when it could, or there is none).
+
+    named: the file the manifest names (the generator's exact truth, format_version 1;
+    RecordingError when it is bad, as `core.io.groundtruth.read_groundtruth`); without one,
+    the annotations in `folder`/groundtruth.json when present (format_version 2, read
+    without the journal, which the store empties after each saved edit). Annotations that
+    cannot be read are not used, and the reason is returned: the recording still opens,
+    and the annotation store says the same when it opens them read-only.
+    """
+    if named is not None:
+        return {f.index: f for f in read_groundtruth(named)}, None
+    path = folder / GROUNDTRUTH_NAME
+    if not path.exists():
+        return {}, None
+    try:
+        if _format_version(path) == EXACT_TRUTH_VERSION:
+            return {f.index: f for f in read_groundtruth(path)}, None
+        annotations, _ = read_annotations(path)
+    except RecordingError as err:
+        return {}, f"ground truth not used: {err}"
+    return frame_truths(annotations, camera, times_ns), None
+
+
+def _format_version(path: Path) -> object:
+    """The file's format_version (None when it is not a JSON object with one)."""
+    try:
+        data = json.loads(path.read_bytes())
+    except (OSError, ValueError):
+        return None
+    return data.get("format_version") if isinstance(data, dict) else None

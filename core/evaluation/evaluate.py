@@ -231,8 +231,11 @@ def evaluate_recording(
     runs on one thread, so that the stage and baseline times are one thread's."""
     with one_thread(), Drive(path) as drive:
         if not drive.has_truth:
+            why = drive.truth_problem or (
+                "found none (annotations count only on frames marked fully annotated)"
+            )
             raise ValueError(
-                f"{drive.path}: expected a groundtruth.json to evaluate against, found none"
+                f"{drive.path}: expected a groundtruth.json to evaluate against, {why}"
             )
         engine = FusionEngine(params, drive.camera)
         scorer = _Scorer(params)

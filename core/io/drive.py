@@ -39,7 +39,7 @@ from core.io.calibration import Calibration, load_calibration
 from core.io.canlog import VehicleSignals
 from core.io.errors import RecordingError
 from core.io.frame import FrameInput, RadarTarget
-from core.io.groundtruth import FrameTruth, read_groundtruth
+from core.io.groundtruth import FrameTruth
 from core.io.index import DriveIndex, load_index
 from core.io.manifest import Manifest, load_manifest
 from core.io.radarscans import RadarScans
@@ -78,9 +78,14 @@ class Drive:
         self._bag: BagReader | None = BagReader(m.resolve(m.camera.bag))
         try:
             self._conn = self._bag.connection(m.camera.topic, CAMERA_TYPES, "camera")
-            self._truth: dict[int, FrameTruth] = {}
-            if m.groundtruth is not None:
-                self._truth = {f.index: f for f in read_groundtruth(m.resolve(m.groundtruth))}
+            # here: core.annotation reads its files with core.io, which imports this module
+            from core.annotation.truth import recording_truth
+
+            named = None if m.groundtruth is None else m.resolve(m.groundtruth)
+            self._truth: dict[int, FrameTruth]
+            self._truth, self.truth_problem = recording_truth(
+                self.path, named, self.calibration.camera, self.times_ns
+            )
             self.frame(0)  # fail on open, not later, when images do not match the calibration
         except BaseException:
             self.close()
@@ -117,7 +122,9 @@ class Drive:
 
     @property
     def has_truth(self) -> bool:
-        return self.manifest.groundtruth is not None
+        """The recording has ground truth for some frame: the generator's exact truth, or
+        annotations with frames marked annotated (`core.annotation.truth`)."""
+        return bool(self._truth)
 
     @property
     def notes(self) -> tuple[str, ...]:
