@@ -39,14 +39,22 @@ def check_box(name: str, box: Sequence[float]) -> Box:
     """`box` as a Box; ValueError naming `name` unless four finite numbers with u0 < u1 and
     v0 < v1."""
     values = tuple(box)
-    if len(values) != 4 or not all(
-        isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in values
-    ):
+    if len(values) != 4 or not all(_finite_number(v) for v in values):
         raise ValueError(f"{name}: expected four finite numbers (u0, v0, u1, v1), got {box!r}")
     u0, v0, u1, v1 = (float(v) for v in values)
     if not (u0 < u1 and v0 < v1):
         raise ValueError(f"{name}: expected u0 < u1 and v0 < v1, got {values!r}")
     return (u0, v0, u1, v1)
+
+
+def _finite_number(value: object) -> bool:
+    """An int or float (not a bool) that is finite as a float (a huge int is not)."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return False
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:
+        return False
 
 
 def _check_frame(name: str, frame: int) -> None:
@@ -69,9 +77,13 @@ class Keyframe:
         _check_frame("frame", self.frame)
         object.__setattr__(self, "box_px", check_box("box_px", self.box_px))
         if self.distance_m is not None and not (
-            math.isfinite(self.distance_m) and self.distance_m > 0
+            _finite_number(self.distance_m) and self.distance_m > 0
         ):
-            raise ValueError(f"distance_m: expected a distance > 0 or None, got {self.distance_m}")
+            raise ValueError(
+                f"distance_m: expected a distance > 0 or None, got {self.distance_m!r}"
+            )
+        if not isinstance(self.interpolate, bool):
+            raise ValueError(f"interpolate: expected true or false, got {self.interpolate!r}")
 
 
 @dataclass(frozen=True)
@@ -128,6 +140,13 @@ class Track:
     end_frame: int | None = None
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "keyframes", tuple(self.keyframes))
+        object.__setattr__(self, "changes", tuple(self.changes))
+        if self.keyframes and not self.keyframes[-1].interpolate:
+            # nothing follows the last keyframe: its gap flag would resurface when a later
+            # box is drawn, so it is never kept
+            last = replace(self.keyframes[-1], interpolate=True)
+            object.__setattr__(self, "keyframes", (*self.keyframes[:-1], last))
         if isinstance(self.id, bool) or not isinstance(self.id, int) or self.id < 1:
             raise ValueError(f"id: expected a track id >= 1, got {self.id!r}")
         if self.cls not in CLASSES:
@@ -246,8 +265,8 @@ class Track:
 
     def ended_at(self, frame: int) -> Track:
         """The track ends on `frame` (it is still there): keyframes after it go; on a frame
-        between two keyframes, the box shown there becomes a keyframe. ValueError before
-        the track's first frame."""
+        between two keyframes, the box shown there becomes a keyframe; in a gap, the track
+        ends at the keyframe before it. ValueError before the track's first frame."""
         if frame < self.first_frame:
             raise ValueError(
                 f"frame: track {self.id} starts on frame {self.first_frame}, cannot end on {frame}"
@@ -256,7 +275,9 @@ class Track:
         kept = tuple(k for k in self.keyframes if k.frame <= frame)
         if kept[-1].frame == frame:
             return replace(self, keyframes=kept, end_frame=None)
-        if shown is not None and frame < self.keyframes[-1].frame:
+        if frame < self.keyframes[-1].frame:
+            if shown is None:  # in a gap: the track ends where it was last seen
+                return replace(self, keyframes=kept, end_frame=None)
             last = Keyframe(frame, shown[0], None, True)
             return replace(self, keyframes=(*kept, last), end_frame=None)
         return replace(self, keyframes=kept, end_frame=frame)
@@ -330,6 +351,8 @@ class Annotations:
     annotated: tuple[tuple[int, int], ...] = ()
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "tracks", tuple(self.tracks))
+        object.__setattr__(self, "annotated", tuple(tuple(r) for r in self.annotated))
         ids = [t.id for t in self.tracks]
         if ids != sorted(set(ids)):
             raise ValueError(f"tracks: expected unique ids in increasing order, got {ids}")

@@ -66,6 +66,17 @@ def test_ending_a_track() -> None:
     assert track.ended_at(20).keyframes[-1].frame == 20 and track.ended_at(20).end_frame is None
     with pytest.raises(ValueError, match="track 1 starts on frame 10, cannot end on 9"):
         track.ended_at(9)
+    # in a gap, where the object is hidden: the track ends where it was last seen
+    gap = car(Keyframe(10, A, interpolate=False), Keyframe(20, B)).ended_at(15)
+    assert gap.keyframes == (Keyframe(10, A),) and gap.last_frame == 10
+
+
+def test_the_last_keyframe_never_keeps_a_gap_flag() -> None:
+    # deleting the keyframe after a gap leaves the keyframe before it last; a box drawn
+    # later must not make a gap nobody asked for
+    track = car(Keyframe(0, A, interpolate=False), Keyframe(10, B)).without_keyframe(10)
+    assert track is not None and track.keyframes == (Keyframe(0, A),)
+    assert track.with_box(8, B).box_at(4) is not None
 
 
 def test_an_attribute_changes_from_its_frame_on_only() -> None:
@@ -170,6 +181,9 @@ def test_annotations_edits_and_annotated_frames() -> None:
         (lambda: Keyframe(0, (0, 0, float("nan"), 1)), r"box_px: expected four finite numbers"),
         (lambda: Keyframe(-1, A), r"frame: expected a frame index >= 0, got -1"),
         (lambda: Keyframe(0, A, distance_m=0.0), r"distance_m: expected a distance > 0"),
+        (lambda: Keyframe(0, A, distance_m="far"), r"distance_m: expected a distance > 0"),  # type: ignore[arg-type]
+        (lambda: Keyframe(0, A, interpolate=1), r"interpolate: expected true or false, got 1"),  # type: ignore[arg-type]
+        (lambda: Keyframe(0, (0, 0, 10**400, 1)), r"box_px: expected four finite numbers"),
         (lambda: Track(1, "bus", (Keyframe(0, A),)), r"cls: expected one of .*got 'bus'"),
         (lambda: Track(0, "car", (Keyframe(0, A),)), r"id: expected a track id >= 1, got 0"),
         (lambda: Track(1, "car", ()), r"keyframes: expected one or more"),
