@@ -72,6 +72,7 @@ class AnnotationPanel:
         self._lock = threading.Lock()
         self._store: AnnotationStore | None = None
         self._frame = 0
+        self._frame_count = 0
         self._rgb: RgbImage | None = None
         self._seeds = Seeds(0)
         self._selected: int | None = None
@@ -86,7 +87,12 @@ class AnnotationPanel:
         with gui.add_folder("Annotation", order=order, expand_by_default=False):
             self._on = gui.add_checkbox("annotate", False, hint="draw and edit ground truth")
             self._status = gui.add_markdown("")
-            self._cls = gui.add_dropdown("class", CLASSES, initial_value="car")
+            self._cls = gui.add_dropdown(
+                "class",
+                CLASSES,
+                initial_value="car",
+                hint="of the selected box, or of the next new one",
+            )
             self._continue = gui.add_dropdown("continue track", (NEW_TRACK,))
             self._occluded = gui.add_checkbox("occluded (from here on)", False)
             self._truncated = gui.add_checkbox("truncated (from here on)", False)
@@ -96,8 +102,11 @@ class AnnotationPanel:
             self._snap = gui.add_button("Snap distance to radar")
             self._accept_all = gui.add_button("Accept all detections here")
             self._done = gui.add_checkbox("this frame is fully annotated", False)
+            self._range = gui.add_text("frames", "", hint="a range such as 0-19")
+            marks = gui.add_button_group("mark frames", ("Annotated", "Not annotated"))
         self._on.on_update(lambda _: self._toggle())
         self._cls.on_update(lambda event: self._from_user(event, self._set_class))
+        self._continue.on_update(lambda event: self._from_user(event, self._pick_track))
         self._attribute_boxes = {
             "occluded": self._occluded,
             "truncated": self._truncated,
@@ -110,12 +119,15 @@ class AnnotationPanel:
         self._snap.on_click(lambda _: self._snap_distance())
         self._accept_all.on_click(lambda _: self._accept(self._seeds.detections))
         self._done.on_update(lambda event: self._from_user(event, self._set_done))
+        marks.on_click(lambda event: self._mark_range(event.target.value == "Annotated"))
 
     # --- from the session ----------------------------------------------------------------
-    def open(self, store: AnnotationStore | None) -> None:
-        """Annotate this recording's store (None: the recording cannot be annotated)."""
+    def open(self, store: AnnotationStore | None, frame_count: int) -> None:
+        """Annotate the store of a recording of `frame_count` frames (None: it cannot be
+        annotated)."""
         with self._lock:
             self._store = store
+            self._frame_count = frame_count
             self._selected = None
         self._refresh()
 
@@ -145,13 +157,17 @@ class AnnotationPanel:
         return self._seen
 
     def _commit(
-        self, label: str, tracks: dict[int, Track | None], done: tuple[int, bool] | None = None
+        self,
+        label: str,
+        tracks: dict[int, Track | None],
+        marked: tuple[int, int, bool] | None = None,
     ) -> bool:
-        """Apply one edit, based on the revision this tab last showed, with undo and redo."""
+        """Apply one edit (tracks put or deleted, frames first..last marked annotated or
+        not), based on the revision this tab last showed, with undo and redo."""
         store = self._store
         if store is None:
             return False
-        ranges = () if done is None else ((done[0], done[0], done[1]),)
+        ranges = () if marked is None else (marked,)
         before = self._seen
         edit = Edit(self._seen_revision, tracks, ranges, label)
         if not self._apply(edit):
@@ -190,6 +206,13 @@ class AnnotationPanel:
     def _selected_track(self) -> Track | None:
         return None if self._selected is None else self._annotations().track(self._selected)
 
+    def _pick_track(self) -> None:
+        """ "new track": nothing selected, the next box starts a track of the class chosen;
+        a track: it is selected, and the next box drawn is its keyframe on this frame."""
+        chosen = self._continue.value
+        self._selected = None if chosen == NEW_TRACK else int(chosen.lstrip("#"))
+        self._refresh()
+
     def _set_class(self) -> None:
         track = self._selected_track()
         if track is not None and track.cls != self._cls.value:
@@ -214,7 +237,28 @@ class AnnotationPanel:
         self._commit(f"interpolation of #{track.id}", {track.id: changed})
 
     def _set_done(self) -> None:
-        self._commit(f"frame {self._frame} annotated", {}, (self._frame, bool(self._done.value)))
+        on = bool(self._done.value)
+        self._commit(f"frame {self._frame} annotated", {}, (self._frame, self._frame, on))
+
+    def _mark_range(self, on: bool) -> None:
+        """Frames typed as "first-last" (or one frame) marked fully annotated, or no longer."""
+        text = self._range.value.strip()
+        first, _, last = text.partition("-")
+        try:
+            a, b = int(first), int(last or first)
+        except ValueError:
+            self._notify(
+                "Frames not understood", f'expected "first-last" such as 0-19, got {text!r}'
+            )
+            return
+        if not 0 <= a <= b < self._frame_count:
+            self._notify(
+                "Frames not in this drive",
+                f"expected 0 <= first <= last <= {self._frame_count - 1}, got {a}-{b}",
+            )
+            return
+        word = "annotated" if on else "not annotated"
+        self._commit(f"frames {a}-{b} {word}", {}, (a, b, on))
 
     def _button(self, which: str) -> None:
         track = self._selected_track()

@@ -195,7 +195,7 @@ class ClientSession:
             self._state = replace(self._state, frame=0, playing=False)
             self._can = can
             self._recent_timings.clear()
-        self._annotation.open(annotations)
+        self._annotation.open(annotations, frame_count)
         self._camera_panel.visible = True
         self._message.content = (
             f"**{_escape_markdown(name)}** — {frame_count} frames at {frame_rate_hz:.1f} Hz"

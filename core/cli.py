@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from core.annotation.model import Track
     from core.importer import CalibrationSpec, CanSpec, ImportOptions, ImportResult, IntrinsicsSpec
 
 DEFAULT_RECORDINGS = Path(__file__).resolve().parents[1] / "recordings"
@@ -302,6 +303,111 @@ def _cmd_import(args: argparse.Namespace) -> int:
         print(f"{command}: {err}", file=sys.stderr)
         return 2
     _report(result, time.monotonic() - started)
+    return 0
+
+
+def _frames_text(ranges: Sequence[tuple[int, int]]) -> str:
+    """'20 (0-19)' for the frames of inclusive (first, last) ranges; 'none' without any."""
+    if not ranges:
+        return "none"
+    count = sum(b - a + 1 for a, b in ranges)
+    return f"{count} ({', '.join(f'{a}-{b}' if b > a else str(a) for a, b in ranges)})"
+
+
+def _export_annotations(args: argparse.Namespace, frame_count: int, size: tuple[int, int]) -> str:
+    """`annotations export`: the store's annotations (journal replayed, nothing written
+    into the recording) to OUT; the lines to print."""
+    from core.annotation.formats import export_command
+    from core.annotation.store import AnnotationStore, read_annotations
+    from core.io.errors import RecordingError
+
+    out: Path = args.out
+    if out.is_dir():
+        raise ValueError(f"OUT {out}: expected a file to write, got a folder")
+    if not out.parent.is_dir():
+        raise ValueError(f"OUT {out}: the folder {out.parent} does not exist")
+    with AnnotationStore(args.recording, writable=False) as store:
+        if store.path.exists():
+            # a store opened read-only shows no annotations when its file holds none it can
+            # read, and says only "opened for reading only": the file's own error is wanted
+            try:
+                read_annotations(store.path)
+            except RecordingError as err:
+                raise RecordingError(f"{err}; nothing was exported") from err
+        annotations, revision = store.snapshot()
+    text = export_command(
+        annotations,
+        out,
+        args.format,
+        frame_count=frame_count,
+        image_size_px=size,
+        keyframes_only=args.keyframes_only,
+    )
+    return f"{text}\nfrom {store.path} (revision {revision})"
+
+
+def _import_annotations(args: argparse.Namespace, frame_count: int) -> tuple[str, str | None]:
+    """`annotations import`: FILE into the store as one edit; the lines to print and a
+    warning (None: none)."""
+    from core.annotation.formats import import_command
+    from core.annotation.store import AnnotationStore, Edit, ReadOnlyError
+
+    imported, read = import_command(args.file, args.format, frame_count=frame_count)
+    with AnnotationStore(args.recording) as store:
+        if store.read_only_reason is not None:
+            raise ReadOnlyError(f"{store.read_only_reason}; nothing was imported")
+        before, revision = store.snapshot()
+        if (before.tracks or before.annotated) and not args.replace:
+            raise _UsageError(
+                f"--replace: {store.path} already holds {len(before.tracks)} tracks and "
+                f"{_frames_text(before.annotated)} frames marked annotated: expected none, or "
+                f"--replace to replace them all with {args.file}'s; nothing was imported"
+            )
+        tracks: dict[int, Track | None] = {t.id: None for t in before.tracks}
+        tracks.update({t.id: t for t in imported.tracks})
+        ranges = [(a, b, False) for a, b in before.annotated]
+        ranges += [(a, b, True) for a, b in imported.annotated]
+        if not tracks and not ranges:
+            return f"{read}\nnothing to save: {store.path} is unchanged", None
+        edit = Edit(revision, tracks, tuple(ranges), f"import {args.file}")
+        saved = store.apply(edit)
+        warning = store.save_error
+    keyframes = sum(len(t.keyframes) for t in imported.tracks)
+    replaced = (
+        f"; replaced {len(before.tracks)} tracks and {_frames_text(before.annotated)} "
+        "frames marked annotated"
+        if before.tracks or before.annotated
+        else ""
+    )
+    return (
+        f"{read}\n{store.path}: revision {saved}: {len(imported.tracks)} tracks, {keyframes} "
+        f"keyframes, {_frames_text(imported.annotated)} frames marked annotated{replaced}",
+        warning,
+    )
+
+
+def _cmd_annotations(args: argparse.Namespace) -> int:
+    from core.annotation.store import EditError
+    from core.io.drive import Drive
+    from core.io.errors import RecordingError
+
+    command = f"fusionscope annotations {args.action}"
+    warning = None
+    try:
+        with Drive(args.recording) as drive:
+            frame_count = len(drive)
+            i = drive.camera.intrinsics
+            size = (i.width_px, i.height_px)
+        if args.action == "export":
+            text = _export_annotations(args, frame_count, size)
+        else:
+            text, warning = _import_annotations(args, frame_count)
+    except (_UsageError, ValueError, RecordingError, EditError, OSError) as err:
+        print(f"{command}: {err}", file=sys.stderr)
+        return 2
+    print(text)
+    if warning is not None:
+        print(f"{command}: warning: {warning}", file=sys.stderr)
     return 0
 
 
@@ -637,6 +743,7 @@ def _common_import_args(p: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from core.annotation.formats import FORMATS
     from core.importer import DEFAULT_FPS, MAPPING_EXAMPLE
     from core.synth.scenarios import SCENARIOS
 
@@ -799,6 +906,63 @@ def build_parser() -> argparse.ArgumentParser:
     _can_args(bag, from_bag=True)
     _common_import_args(bag)
     bag.set_defaults(func=_cmd_import)
+
+    annotations = sub.add_parser(
+        "annotations",
+        help="export a recording's annotations to MOT, KITTI, COCO or CVAT, or import them",
+        description=_paragraph(
+            "Annotations are the boxes drawn in the inspector, kept in the recording's "
+            "groundtruth.json. Formats: mot (MOT Challenge gt.txt), kitti (KITTI tracking "
+            "label_02), coco (COCO JSON with track ids), cvat (CVAT for video 1.1 XML). Box "
+            "edges, ids, frames, classes and attributes of each: core/annotation/formats.py."
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    actions = annotations.add_subparsers(dest="action", required=True)
+    export = actions.add_parser(
+        "export",
+        help="write a recording's annotations to a file",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=_paragraph(
+            "Write the annotations of RECORDING (groundtruth.json with the edits of its "
+            "journal; nothing in the recording is written) to OUT: the box of every frame "
+            "a track is on, interpolated frames included, unless --keyframes-only. What the "
+            "format cannot hold (radar distances snapped to keyframes, some attributes, in "
+            "mot and kitti the frames marked annotated) is listed after writing."
+        ),
+    )
+    export.add_argument("recording", type=Path, metavar="RECORDING", help="a recording folder")
+    export.add_argument("out", type=Path, metavar="OUT", help="file to write (replaced whole)")
+    export.add_argument("--format", required=True, choices=FORMATS, help="the file's format")
+    export.add_argument(
+        "--keyframes-only",
+        action="store_true",
+        help="write the keyframes' boxes only (mot, kitti and coco then read back with gaps "
+        "between them; cvat keeps its interpolation)",
+    )
+    export.set_defaults(func=_cmd_annotations)
+    load = actions.add_parser(
+        "import",
+        help="read annotations from a file into a recording",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=_paragraph(
+            "Read FILE as annotations of RECORDING and save them into its groundtruth.json "
+            "as one edit: tracks rebuilt as sparse keyframes, and the frames the file marks "
+            "annotated (mot and kitti mark none: then every frame of the recording) marked "
+            "annotated. Into a recording that already has tracks or annotated frames only with "
+            "--replace, which deletes its tracks and unmarks its frames in the same edit. The "
+            "evaluation counts only the frames marked annotated."
+        ),
+    )
+    load.add_argument("recording", type=Path, metavar="RECORDING", help="a recording folder")
+    load.add_argument("file", type=Path, metavar="FILE", help="the annotation file to read")
+    load.add_argument("--format", required=True, choices=FORMATS, help="the file's format")
+    load.add_argument(
+        "--replace",
+        action="store_true",
+        help="delete every track of the recording and unmark every annotated frame first",
+    )
+    load.set_defaults(func=_cmd_annotations)
 
     info = sub.add_parser(
         "info",

@@ -89,8 +89,7 @@ Notes:
     fmt, *, frame_count=None)`. frame_names are used by coco only (image file_name, default
     "000000.png", ...). The section at the end (export_command, import_command and
     not_carried, which lists what a format leaves out) is what `fusionscope annotations
-    export|import` runs once the recording and its annotation store are open; core/cli.py
-    does not call it yet (the store, core/annotation/store.py, is not ready).
+    export|import` (core/cli.py) runs once the recording and its annotation store are open.
     A file is written to NAME.partial and renamed: whole or not at all.
 """
 

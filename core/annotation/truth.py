@@ -124,18 +124,23 @@ def recording_truth(
     named: the file the manifest names (the generator's exact truth, format_version 1;
     RecordingError when it is bad, as `core.io.groundtruth.read_groundtruth`); without one,
     the annotations in `folder`/groundtruth.json when present (format_version 2, read
-    without the journal, which the store empties after each saved edit). Annotations that
-    cannot be read are not used, and the reason is returned: the recording still opens,
-    and the annotation store says the same when it opens them read-only.
+    without the journal, which the store empties after each saved edit). A file that
+    cannot be used is not, and the reason is returned: annotations that cannot be read
+    (the recording still opens, and the annotation store says the same when it opens them
+    read-only), or a generated truth the manifest does not name (copied from another
+    drive, its frames would not be this drive's).
     """
     if named is not None:
         return {f.index: f for f in read_groundtruth(named)}, None
     path = folder / GROUNDTRUTH_NAME
     if not path.exists():
         return {}, None
+    if _format_version(path) == EXACT_TRUTH_VERSION:
+        return {}, (
+            f"ground truth not used: {path} holds a generated drive's exact truth "
+            "(format_version 1), which only a recording.yaml naming it says is this drive's"
+        )
     try:
-        if _format_version(path) == EXACT_TRUTH_VERSION:
-            return {f.index: f for f in read_groundtruth(path)}, None
         annotations, _ = read_annotations(path)
     except RecordingError as err:
         return {}, f"ground truth not used: {err}"

@@ -235,7 +235,8 @@ def evaluate_recording(
                 "found none (annotations count only on frames marked fully annotated)"
             )
             raise ValueError(
-                f"{drive.path}: expected a groundtruth.json to evaluate against, {why}"
+                f"{drive.path}: expected ground truth to evaluate against (a generated "
+                f"groundtruth.json, or annotations with frames marked annotated), {why}"
             )
         engine = FusionEngine(params, drive.camera)
         scorer = _Scorer(params)

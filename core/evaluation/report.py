@@ -383,9 +383,9 @@ def tables(
                     _pct(r.motion_stereo.obstacles_hit, r.motion_stereo.obstacles),
                     f"{r.motion_stereo.pixel_recall:.0%}",
                     f"{r.motion_stereo.pixel_precision:.0%}",
-                    f"{r.pitch.rms_deg:.2f}",
-                    f"{r.pitch.max_deg:.2f}",
-                    f"{r.pitch.calibration_rms_deg:.2f}",
+                    _deg(r.pitch.rms_deg),
+                    _deg(r.pitch.max_deg),
+                    _deg(r.pitch.calibration_rms_deg),
                 )
                 for r in rows
             ),
@@ -605,3 +605,8 @@ def format_csv(reports: Sequence[RecordingReport], total: RecordingReport) -> st
         for name, value in flat:
             writer.writerow((r.name, name, "" if value is None else value))
     return buffer.getvalue()
+
+
+def _deg(value: float) -> str:
+    """Degrees to two places; "-" for none (no frame had a true pitch)."""
+    return "-" if math.isnan(value) else f"{value:.2f}"

@@ -4,12 +4,19 @@ only the annotated frames, guard rails and classes mapped."""
 from __future__ import annotations
 
 import math
+import shutil
 
 import numpy as np
 import pytest
 
 from core.annotation.model import Annotations, AttributeChange, Keyframe, Track
-from core.annotation.truth import OCCLUDED_FRACTION, TYPICAL_LENGTH_M, frame_truths
+from core.annotation.store import GROUNDTRUTH_NAME
+from core.annotation.truth import (
+    OCCLUDED_FRACTION,
+    TYPICAL_LENGTH_M,
+    frame_truths,
+    recording_truth,
+)
 from core.cli import DEFAULT_RECORDINGS
 from core.io.drive import Drive
 
@@ -93,3 +100,14 @@ def test_a_box_above_the_horizon_has_no_position(camera) -> None:  # type: ignor
 
 def test_frames_marked_beyond_the_drive_are_left_out(camera) -> None:  # type: ignore[no-untyped-def]
     assert sorted(frame_truths(Annotations(annotated=((2, 9),)), camera, [0, 1, 2, 3])) == [2, 3]
+
+
+def test_a_generated_truth_the_manifest_does_not_name_is_not_used(camera, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    shutil.copy(DEFAULT_RECORDINGS / "highway" / GROUNDTRUTH_NAME, tmp_path / GROUNDTRUTH_NAME)
+    truths, why = recording_truth(tmp_path, None, camera, [0, 1, 2])
+    assert truths == {} and why is not None and "format_version 1" in why
+    (tmp_path / GROUNDTRUTH_NAME).write_text("{not json")
+    truths, why = recording_truth(tmp_path, None, camera, [0, 1, 2])
+    assert truths == {} and why is not None and why.startswith("ground truth not used: ")
+    (tmp_path / GROUNDTRUTH_NAME).unlink()
+    assert recording_truth(tmp_path, None, camera, [0, 1, 2]) == ({}, None)
