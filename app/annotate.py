@@ -21,8 +21,11 @@ from __future__ import annotations
 
 import functools
 import math
+import tempfile
 import threading
 from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 import viser
@@ -41,12 +44,26 @@ from app.annotation_view import (
 )
 from app.draw import RgbImage
 from app.history import Change, History
+from app.params_panel import NoticeColour
+from core.annotation.formats import FORMATS, export_annotations, import_annotations
 from core.annotation.model import CLASSES, Annotations, Box, Keyframe, Track
+from core.annotation.seed import engine_track
 from core.annotation.store import AnnotationStore, Conflict, Edit, EditError
+from core.io.errors import RecordingError
+from core.params import Params
+from core.tracking import Kind
 
 NEW_TRACK = "new track"
+NO_TRACK = "(none)"
+FILE_SUFFIX = {"mot": "txt", "kitti": "txt", "coco": "json", "cvat": "xml"}
 VIEW_MARGIN = 1.15  # the top-down camera sees this much more than the frame
 DETECTION_CLASS = {"vehicle": "car", "pedestrian": "pedestrian"}
+
+
+class Notify(Protocol):
+    """A notification in the tab (`ClientSession.notify`)."""
+
+    def __call__(self, title: str, message: str, color: NoticeColour = "red") -> None: ...
 
 
 class AnnotationPanel:
@@ -54,19 +71,22 @@ class AnnotationPanel:
 
     history: the tab's undo stack; notify(title, message): a notification in this tab;
     order: the folder's place; on_toggle(on): annotation mode switched (the session then
-    asks for pictures with the bare frame, which `show_frame` receives).
+    asks for pictures with the bare frame, which `show_frame` receives); params: the
+    parameters the tab's engine runs with (set A), to follow an engine track with.
     """
 
     def __init__(
         self,
         client: viser.ClientHandle,
         history: History,
-        notify: Callable[[str, str], None],
+        notify: Notify,
         order: float,
         on_toggle: Callable[[bool], None],
+        params: Callable[[], Params],
     ) -> None:
         self.client = client
         self._on_toggle = on_toggle
+        self._params = params
         self._history = history
         self._notify = notify
         self._lock = threading.Lock()
@@ -104,6 +124,15 @@ class AnnotationPanel:
             self._done = gui.add_checkbox("this frame is fully annotated", False)
             self._range = gui.add_text("frames", "", hint="a range such as 0-19")
             marks = gui.add_button_group("mark frames", ("Annotated", "Not annotated"))
+            self._engine_track = gui.add_dropdown("engine track", (NO_TRACK,))
+            self._follow = gui.add_button(
+                "Accept it over the frames", hint="the engine's track, as sparse keyframes"
+            )
+            self._format = gui.add_dropdown("file format", FORMATS, initial_value="cvat")
+            self._download = gui.add_button("Download the annotations")
+            self._upload = gui.add_upload_button(
+                "Import a file (replaces all)", hint="undo brings the old annotations back"
+            )
         self._on.on_update(lambda _: self._toggle())
         self._cls.on_update(lambda event: self._from_user(event, self._set_class))
         self._continue.on_update(lambda event: self._from_user(event, self._pick_track))
@@ -120,6 +149,9 @@ class AnnotationPanel:
         self._accept_all.on_click(lambda _: self._accept(self._seeds.detections))
         self._done.on_update(lambda event: self._from_user(event, self._set_done))
         marks.on_click(lambda event: self._mark_range(event.target.value == "Annotated"))
+        self._follow.on_click(lambda _: self._start_following())
+        self._download.on_click(lambda _: self._send_download())
+        self._upload.on_upload(lambda event: self._import(event.target.value))
 
     # --- from the session ----------------------------------------------------------------
     def open(self, store: AnnotationStore | None, frame_count: int) -> None:
@@ -164,10 +196,17 @@ class AnnotationPanel:
     ) -> bool:
         """Apply one edit (tracks put or deleted, frames first..last marked annotated or
         not), based on the revision this tab last showed, with undo and redo."""
+        return self._commit_ranges(label, tracks, () if marked is None else (marked,))
+
+    def _commit_ranges(
+        self,
+        label: str,
+        tracks: dict[int, Track | None],
+        ranges: tuple[tuple[int, int, bool], ...],
+    ) -> bool:
         store = self._store
-        if store is None:
+        if store is None or not (tracks or ranges):
             return False
-        ranges = () if marked is None else (marked,)
         before = self._seen
         edit = Edit(self._seen_revision, tracks, ranges, label)
         if not self._apply(edit):
@@ -240,8 +279,9 @@ class AnnotationPanel:
         on = bool(self._done.value)
         self._commit(f"frame {self._frame} annotated", {}, (self._frame, self._frame, on))
 
-    def _mark_range(self, on: bool) -> None:
-        """Frames typed as "first-last" (or one frame) marked fully annotated, or no longer."""
+    def _typed_range(self) -> tuple[int, int] | None:
+        """The frames typed as "first-last" (or one frame); None, with a notification, when
+        they are not frames of this drive."""
         text = self._range.value.strip()
         first, _, last = text.partition("-")
         try:
@@ -250,15 +290,107 @@ class AnnotationPanel:
             self._notify(
                 "Frames not understood", f'expected "first-last" such as 0-19, got {text!r}'
             )
-            return
+            return None
         if not 0 <= a <= b < self._frame_count:
             self._notify(
                 "Frames not in this drive",
                 f"expected 0 <= first <= last <= {self._frame_count - 1}, got {a}-{b}",
             )
+            return None
+        return a, b
+
+    def _mark_range(self, on: bool) -> None:
+        """The typed frames marked fully annotated, or no longer."""
+        frames = self._typed_range()
+        if frames is not None:
+            word = "annotated" if on else "not annotated"
+            self._commit(f"frames {frames[0]}-{frames[1]} {word}", {}, (*frames, on))
+
+    def _start_following(self) -> None:
+        """The chosen engine track over the typed frames, on a background thread (the
+        engine plays the clip), then one edit adding it as a new track."""
+        choice = self._engine_track.value
+        track = next((t for t in self._seeds.tracks if _track_label(t) == choice), None)
+        if track is None:
+            self._notify("No engine track chosen", "pick one of this frame's tracks first")
             return
-        word = "annotated" if on else "not annotated"
-        self._commit(f"frames {a}-{b} {word}", {}, (a, b, on))
+        frames = self._typed_range()
+        store = self._store
+        if frames is None or store is None:
+            return
+        if not frames[0] <= self._frame <= frames[1]:
+            self._notify("Frames without this one", f"expected a range around frame {self._frame}")
+            return
+        kind, _, box = track
+        args = (store.folder, self._params(), *frames, self._frame, box, kind)
+        self._follow.disabled = True
+        threading.Thread(target=self._follow_track, args=args, daemon=True).start()
+
+    def _follow_track(
+        self,
+        recording: Path,
+        params: Params,
+        first: int,
+        last: int,
+        frame: int,
+        box: Box,
+        kind: Kind,
+    ) -> None:
+        try:
+            track = engine_track(
+                recording, params, first, last, frame, box, kind, self._seen.next_id()
+            )
+        except (ValueError, RecordingError) as err:
+            self._notify("Track not accepted", str(err))
+        else:
+            label = f"engine {kind} track over frames {first}-{last} as #{track.id}"
+            if self._commit(label, {track.id: track}):
+                self._notify(
+                    "Track accepted",
+                    f"#{track.id}: {len(track.keyframes)} keyframes for frames "
+                    f"{track.first_frame}-{track.last_frame}",
+                    "green",
+                )
+        finally:
+            self._follow.disabled = False
+
+    def _send_download(self) -> None:
+        """The annotations as shown, in the chosen format, as a file download."""
+        if self._rgb is None or self._store is None:
+            return
+        fmt = self._format.value
+        with tempfile.TemporaryDirectory() as folder:
+            path = Path(folder) / f"{self._store.folder.name}-annotations.{FILE_SUFFIX[fmt]}"
+            export_annotations(
+                self._seen, path, fmt, frame_count=self._frame_count, image_size_px=self._size()
+            )
+            self.client.send_file_download(path.name, path.read_bytes(), save_immediately=True)
+
+    def _import(self, upload: viser.UploadedFile) -> None:
+        """An uploaded file in the chosen format replaces every track and annotated frame,
+        as one edit (undo brings the old ones back)."""
+        fmt = self._format.value
+        with tempfile.TemporaryDirectory() as folder:
+            path = Path(folder) / Path(upload.name).name
+            path.write_bytes(upload.content)
+            try:
+                imported = import_annotations(path, fmt, frame_count=self._frame_count)
+            except (RecordingError, ValueError) as err:  # named as uploaded, not as saved here
+                self._notify(
+                    f"{upload.name} not imported", str(err).replace(str(path), upload.name)
+                )
+                return
+        old = self._seen
+        tracks: dict[int, Track | None] = {t.id: None for t in old.tracks}
+        tracks.update({t.id: t for t in imported.tracks})
+        ranges = [(a, b, False) for a, b in old.annotated]
+        ranges += [(a, b, True) for a, b in imported.annotated]
+        if self._commit_ranges(f"import {upload.name}", tracks, tuple(ranges)):
+            self._notify(
+                f"{upload.name} imported",
+                f"{len(imported.tracks)} tracks replace {len(old.tracks)}",
+                "green",
+            )
 
     def _button(self, which: str) -> None:
         track = self._selected_track()
@@ -420,6 +552,9 @@ class AnnotationPanel:
                 f"{len(ann.tracks)} tracks, revision {self._seen_revision}; "
                 f"frames annotated: {_ranges_text(ann.annotated)}"
             )
+        engine_tracks = (NO_TRACK, *(_track_label(t) for t in self._seeds.tracks))
+        if self._engine_track.options != engine_tracks:
+            self._engine_track.options = engine_tracks
         ids = tuple(f"#{t.id}" for t in ann.tracks)
         if self._continue.options != (NEW_TRACK, *ids):
             self._continue.options = (NEW_TRACK, *ids)
@@ -452,6 +587,11 @@ class AnnotationPanel:
             self._image.on_drag("left")(self._on_drag)
         else:
             self._image.image = picture
+
+
+def _track_label(track: tuple[str, int, Box]) -> str:
+    kind, track_id, _ = track
+    return f"{kind} #{track_id}"
 
 
 def _ranges_text(ranges: Sequence[tuple[int, int]]) -> str:

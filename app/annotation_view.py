@@ -54,11 +54,13 @@ SEED_KINDS = ("vehicle", "pedestrian")  # detections annotation can accept
 class Seeds:
     """What the engine found on one frame, for seeding annotations: detections as (kind,
     box_px) of SEED_KINDS, and the searched radar targets' base points as (u_px, v_px,
-    x_m) for snapping a box's distance."""
+    x_m) for snapping a box's distance, and the engine's confirmed vehicle and pedestrian
+    tracks, to accept one over a clip."""
 
     frame: int
     detections: tuple[tuple[str, Box], ...] = ()
     radar_bases: tuple[tuple[float, float, float], ...] = ()
+    tracks: tuple[tuple[str, int, Box], ...] = ()  # confirmed engine tracks: kind, id, box
 
 
 def snapped_distance_m(box: Box, radar_bases: Sequence[tuple[float, float, float]]) -> float | None:

@@ -126,7 +126,12 @@ class ClientSession:
             box.on_update(lambda _: self._set_panels())
         self._params_panel = ParamsPanel(gui, self._param_sets, self.notify, order=5)
         self._annotation = AnnotationPanel(
-            client, self._history, self.notify, ANNOTATION_ORDER, self._set_annotating
+            client,
+            self._history,
+            self.notify,
+            ANNOTATION_ORDER,
+            self._set_annotating,
+            lambda: self._state.params,
         )
         self._add_commands(gui)
 

@@ -199,10 +199,14 @@ def render_view(
 
 def seeds(result: FrameResult) -> Seeds:
     """What annotation can take from a frame's result: its vehicles and kept pedestrians
-    (`core.compare.detections`) and each searched radar target's base point and distance."""
+    (`core.compare.detections`), each searched radar target's base point and distance, and
+    the confirmed vehicle and pedestrian tracks."""
     boxes = tuple((d.kind, d.box_px) for d in detections(result) if d.kind in SEED_KINDS)
     bases = tuple((a.base_px[0], a.base_px[1], a.target.x_m) for a in result.areas)
-    return Seeds(result.index, boxes, bases)
+    tracks = tuple(
+        (t.kind, t.id, t.box_px) for t in (*result.tracked_vehicles, *result.tracked_pedestrians)
+    )
+    return Seeds(result.index, boxes, bases, tracks)
 
 
 def bird_eye_view(

@@ -6,6 +6,8 @@ Fixtures in conftest.py, helpers in browser_page.py."""
 from __future__ import annotations
 
 import json
+import re
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +15,8 @@ import pytest
 from browser_page import TIMEOUT_MS, camera_src, serving, set_field
 from playwright.sync_api import Browser, Page
 
-from core.cli import main
+from core.annotation.formats import import_annotations
+from core.cli import DEFAULT_RECORDINGS, main
 
 NAME = "cars"
 FOLDER_OPEN_MS = 600  # longer than a folder's unfolding animation
@@ -133,3 +136,53 @@ def test_two_tabs_editing_one_box_the_second_is_refused(cars: Path, browser: Bro
         assert saved(cars) == after_first
     first.context.close()
     second.context.close()
+
+
+@pytest.fixture(scope="module")
+def unannotated(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A recordings root with the bundled exurban drive (radar, tracked cars) without its
+    generated truth, so that it can be annotated."""
+    root = tmp_path_factory.mktemp("unannotated")
+    shutil.copytree(DEFAULT_RECORDINGS / "exurban", root / "exurban")
+    (root / "exurban" / "groundtruth.json").unlink()
+    manifest = root / "exurban" / "recording.yaml"
+    lines = manifest.read_text().splitlines()
+    manifest.write_text("\n".join(x for x in lines if not x.startswith("groundtruth:")) + "\n")
+    return root
+
+
+def test_accept_an_engine_track_download_and_import_a_file(
+    unannotated: Path, page: Page, tmp_path: Path
+) -> None:
+    recording = unannotated / "exurban"
+    with serving(page, unannotated, "exurban"):
+        annotate(page)
+        set_field(page, "go to time s", "5.5")  # frame 55: a car tracked since frame 42
+        page.get_by_text("frame 55 /").wait_for(timeout=TIMEOUT_MS)
+        page.wait_for_timeout(SETTLE_MS)
+        choice = page.get_by_label("engine track", exact=True)
+        choice.click()
+        page.get_by_role("option", name=re.compile(r"^vehicle #\d+$")).first.click()
+        set_field(page, "frames", "45-75")
+        page.get_by_role("button", name="Accept it over the frames").click()
+        page.get_by_text("Track accepted").wait_for(timeout=TIMEOUT_MS)
+        (track,) = json.loads((recording / "groundtruth.json").read_text())["tracks"]
+        assert track["class"] == "car" and 2 <= len(track["keyframes"]) < 31
+
+        with page.expect_download(timeout=TIMEOUT_MS) as download:
+            page.get_by_role("button", name="Download the annotations").click()
+        exported = tmp_path / download.value.suggested_filename
+        download.value.save_as(exported)
+        assert exported.name == "exurban-annotations.xml"  # cvat, the default format
+        assert (
+            import_annotations(exported, "cvat").tracks[0].keyframes[0].frame
+            == (track["keyframes"][0]["frame"])
+        )
+
+        bad = tmp_path / "broken.xml"
+        bad.write_text("<annotations><track")
+        page.locator("input[type=file]").set_input_files(str(bad))
+        page.get_by_text("broken.xml not imported").wait_for(timeout=TIMEOUT_MS)
+        page.locator("input[type=file]").set_input_files(str(exported))
+        page.get_by_text("exurban-annotations.xml imported").wait_for(timeout=TIMEOUT_MS)
+        assert len(json.loads((recording / "groundtruth.json").read_text())["tracks"]) == 1
