@@ -55,6 +55,7 @@ from core.tracking import Kind
 
 NEW_TRACK = "new track"
 NO_TRACK = "(none)"
+NO_DETECTION = "(none)"
 FILE_SUFFIX = {"mot": "txt", "kitti": "txt", "coco": "json", "cvat": "xml"}
 VIEW_MARGIN = 1.15  # the top-down camera sees this much more than the frame
 DETECTION_CLASS = {"vehicle": "car", "pedestrian": "pedestrian"}
@@ -120,7 +121,8 @@ class AnnotationPanel:
             self._interpolate = gui.add_checkbox("interpolate to the next keyframe", True)
             buttons = gui.add_button_group("selected", ("Delete key", "Delete track", "End here"))
             self._snap = gui.add_button("Snap distance to radar")
-            self._accept_all = gui.add_button("Accept all detections here")
+            self._detection = gui.add_dropdown("detection", (NO_DETECTION,))
+            accept = gui.add_button_group("accept", ("This detection", "All detections here"))
             self._done = gui.add_checkbox("this frame is fully annotated", False)
             self._range = gui.add_text("frames", "", hint="a range such as 0-19")
             marks = gui.add_button_group("mark frames", ("Annotated", "Not annotated"))
@@ -146,7 +148,7 @@ class AnnotationPanel:
         self._interpolate.on_update(lambda event: self._from_user(event, self._set_interpolation))
         buttons.on_click(lambda event: self._button(event.target.value))
         self._snap.on_click(lambda _: self._snap_distance())
-        self._accept_all.on_click(lambda _: self._accept(self._seeds.detections))
+        accept.on_click(lambda event: self._accept_chosen(event.target.value == "This detection"))
         self._done.on_update(lambda event: self._from_user(event, self._set_done))
         marks.on_click(lambda event: self._mark_range(event.target.value == "Annotated"))
         self._follow.on_click(lambda _: self._start_following())
@@ -424,6 +426,16 @@ class AnnotationPanel:
         changed = track.with_box(self._frame, shown[0], distance)
         self._commit(f"distance of #{track.id}", {track.id: changed})
 
+    def _accept_chosen(self, one: bool) -> None:
+        """The detection chosen, or all of this frame's, accepted."""
+        detections = self._seeds.detections
+        if one:
+            labels = _detection_labels(detections)
+            detections = tuple(
+                d for d, n in zip(detections, labels, strict=True) if n == self._detection.value
+            )
+        self._accept(detections)
+
     def _accept(self, detections: Sequence[tuple[str, Box]]) -> None:
         """Each detection becomes a new track with one keyframe (with its radar distance)."""
         if self._seeds.frame != self._frame or not detections:
@@ -552,6 +564,9 @@ class AnnotationPanel:
                 f"{len(ann.tracks)} tracks, revision {self._seen_revision}; "
                 f"frames annotated: {_ranges_text(ann.annotated)}"
             )
+        found = (NO_DETECTION, *_detection_labels(self._seeds.detections))
+        if self._detection.options != found:
+            self._detection.options = found
         engine_tracks = (NO_TRACK, *(_track_label(t) for t in self._seeds.tracks))
         if self._engine_track.options != engine_tracks:
             self._engine_track.options = engine_tracks
@@ -587,6 +602,11 @@ class AnnotationPanel:
             self._image.on_drag("left")(self._on_drag)
         else:
             self._image.image = picture
+
+
+def _detection_labels(detections: Sequence[tuple[str, Box]]) -> tuple[str, ...]:
+    """ "vehicle 1 at u 312", ... : each detection by kind, number and left edge."""
+    return tuple(f"{kind} {k + 1} at u {box[0]:.0f}" for k, (kind, box) in enumerate(detections))
 
 
 def _track_label(track: tuple[str, int, Box]) -> str:

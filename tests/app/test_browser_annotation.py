@@ -186,3 +186,9 @@ def test_accept_an_engine_track_download_and_import_a_file(
         page.locator("input[type=file]").set_input_files(str(exported))
         page.get_by_text("exurban-annotations.xml imported").wait_for(timeout=TIMEOUT_MS)
         assert len(json.loads((recording / "groundtruth.json").read_text())["tracks"]) == 1
+        page.get_by_label("detection", exact=True).click()
+        page.get_by_role("option", name=re.compile(r"^vehicle 1 at u \d+$")).click()
+        page.get_by_role("button", name="This detection").click()
+        page.wait_for_timeout(SETTLE_MS)
+        tracks = json.loads((recording / "groundtruth.json").read_text())["tracks"]
+        assert len(tracks) == 2 and [k["frame"] for k in tracks[1]["keyframes"]] == [55]
