@@ -24,7 +24,13 @@ from typing import Literal
 import cv2
 import numpy as np
 
-from app.draw import RgbImage, put_tag, require_rgb_image
+from app.draw import (
+    CLASS_COLOURS,
+    GUARD_RAIL_COLOUR,
+    RgbImage,
+    put_tag,
+    require_rgb_image,
+)
 from core.annotation.model import Box, Shown
 
 PX_TO_M = 0.01  # the annotation plane's scale: a 640 px wide frame is 6.4 m wide
@@ -36,14 +42,11 @@ KEYFRAME_THICKNESS_PX = 2
 DASH_PX = 6
 SELECTED_COLOUR = (255, 255, 0)
 DRAFT_COLOUR = (255, 255, 255)
+# the classes in the colours the ground-truth layer draws them in (app.draw)
 ANNOTATION_COLOURS = {
-    "car": (60, 140, 255),
-    "truck": (160, 90, 255),
-    "van": (0, 190, 190),
-    "pedestrian": (255, 60, 60),
-    "cyclist": (255, 90, 200),
-    "guard_rail": (255, 140, 0),
-    "other_obstacle": (200, 200, 200),
+    **{c: CLASS_COLOURS[c] for c in ("car", "truck", "van", "pedestrian", "cyclist")},
+    "guard_rail": GUARD_RAIL_COLOUR,
+    "other_obstacle": CLASS_COLOURS["other"],
 }
 
 

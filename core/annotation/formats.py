@@ -114,6 +114,7 @@ from core.annotation.model import (
     Keyframe,
     Track,
     check_box,
+    douglas_peucker,
     interpolate,
     simplify,
 )
@@ -1201,30 +1202,10 @@ def _thinned(keys: list[Keyframe], marked: set[int]) -> list[Keyframe]:
         span = keys[start : end + 1]
         cuts = sorted({0, len(span) - 1} | {i for i, k in enumerate(span) if k.frame in marked})
         for a, b in itertools.pairwise(cuts):
-            keep |= {start + i for i in _peucker(span, a, b)}
+            keep |= {start + i for i in douglas_peucker(span, IMPORT_TOLERANCE_PX, a, b)}
         keep |= {start + c for c in cuts}
         start = end + 1
     return [keys[i] for i in sorted(keep)]
-
-
-def _peucker(keys: Sequence[Keyframe], first: int, last: int) -> set[int]:
-    keep = {first, last}
-    spans = [(first, last)]
-    while spans:
-        i, j = spans.pop()
-        worst, at = -1.0, -1
-        for m in range(i + 1, j):
-            guess = interpolate(keys[i], keys[j], keys[m].frame)
-            error = max(abs(g - t) for g, t in zip(guess, keys[m].box_px, strict=True))
-            if error > worst:
-                worst, at = error, m
-        if worst > IMPORT_TOLERANCE_PX:
-            keep.add(at)
-            spans += [(i, at), (at, j)]
-    return keep
-
-
-# --- for `fusionscope annotations export|import` (core/cli.py) ---------------------------
 
 
 def not_carried(

@@ -303,7 +303,7 @@ def simplify(
     for end in range(1, len(given) + 1):  # runs of consecutive frames
         if end == len(given) or given[end].frame != given[end - 1].frame + 1:
             run = given[start:end]
-            chosen = _douglas_peucker(run, tolerance_px)
+            chosen = [run[m] for m in sorted(douglas_peucker(run, tolerance_px))]
             last_of_run = end < len(given)
             out += [
                 replace(k, interpolate=False) if last_of_run and k is chosen[-1] else k
@@ -313,23 +313,28 @@ def simplify(
     return tuple(out)
 
 
-def _douglas_peucker(run: Sequence[Keyframe], tolerance_px: float) -> list[Keyframe]:
-    keep = {0, len(run) - 1}
-    spans = [(0, len(run) - 1)]
+def douglas_peucker(
+    keys: Sequence[Keyframe], tolerance_px: float, first: int = 0, last: int | None = None
+) -> set[int]:
+    """Indices into `keys` (boxes on increasing frames) of those to keep between `first` and
+    `last` (both kept; default: all of them) so that linear interpolation between the kept
+    ones reproduces every other within `tolerance_px` on each corner coordinate
+    (Ramer-Douglas-Peucker on the frame axis)."""
+    last = len(keys) - 1 if last is None else last
+    keep = {first, last}
+    spans = [(first, last)]
     while spans:
         i, j = spans.pop()
-        if j - i < 2:
-            continue
         worst, at = -1.0, -1
         for m in range(i + 1, j):
-            guess = interpolate(run[i], run[j], run[m].frame)
-            error = max(abs(g - t) for g, t in zip(guess, run[m].box_px, strict=True))
+            guess = interpolate(keys[i], keys[j], keys[m].frame)
+            error = max(abs(g - t) for g, t in zip(guess, keys[m].box_px, strict=True))
             if error > worst:
                 worst, at = error, m
         if worst > tolerance_px:
             keep.add(at)
             spans += [(i, at), (at, j)]
-    return [run[m] for m in sorted(keep)]
+    return keep
 
 
 def _merged(ranges: Iterable[tuple[int, int]]) -> tuple[tuple[int, int], ...]:
