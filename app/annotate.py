@@ -27,7 +27,6 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Protocol
 
-import numpy as np
 import viser
 
 from app.annotation_view import (
@@ -37,9 +36,11 @@ from app.annotation_view import (
     DragAction,
     Seeds,
     annotated_picture,
+    box_under,
     drag_action,
     dragged_box,
     pixel_of,
+    plane_pixel,
     snapped_distance_m,
 )
 from app.draw import RgbImage
@@ -482,21 +483,14 @@ class AnnotationPanel:
         return int(self._rgb.shape[1]), int(self._rgb.shape[0])
 
     def _on_click(self, event: viser.SceneNodePointerEvent[viser.ImageHandle]) -> None:
-        origin, direction = np.array(event.ray_origin), np.array(event.ray_direction)
-        if self._rgb is None or abs(direction[2]) < 1e-9:
+        """Select the smallest box under the pointer (none: nothing selected)."""
+        if self._rgb is None:
             return
-        point = origin + (PLANE_Z_M - origin[2]) / direction[2] * direction
-        u, v = pixel_of(point, self._size())
-        shown = self._annotations().shown_at(self._frame)
-        inside = [
-            s for s in shown if s.box_px[0] <= u <= s.box_px[2] and s.box_px[1] <= v <= s.box_px[3]
-        ]
-        smallest = min(
-            inside,
-            key=lambda s: (s.box_px[2] - s.box_px[0]) * (s.box_px[3] - s.box_px[1]),
-            default=None,
-        )
-        self._selected = None if smallest is None else smallest.track_id
+        pixel = plane_pixel(event.ray_origin, event.ray_direction, self._size())
+        if pixel is None:
+            return
+        under = box_under(pixel, self._annotations().shown_at(self._frame))
+        self._selected = None if under is None else under.track_id
         self._refresh()
 
     def _on_drag(self, event: viser.SceneNodeDragEvent[viser.ImageHandle]) -> None:

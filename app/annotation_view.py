@@ -38,6 +38,7 @@ PLANE_Z_M = 50.0  # above the bird's-eye view, which lies at z = 0
 PLANE_WXYZ = (0.0, 1.0, 0.0, 0.0)  # half a turn about x: image rows run along -y
 CORNER_GRAB_PX = 8.0  # a drag starting this close to a corner of the selected box resizes it
 MIN_BOX_PX = 3.0  # a drawn box narrower or lower than this is a click, not a box
+PARALLEL_RAY = 1e-9  # a ray whose z direction is smaller never meets the plane
 KEYFRAME_THICKNESS_PX = 2
 DASH_PX = 6
 SELECTED_COLOUR = (255, 255, 0)
@@ -81,6 +82,32 @@ def pixel_of(position_m: Sequence[float], size_px: tuple[int, int]) -> tuple[flo
     return (float(position_m[0]) / PX_TO_M + w / 2, h / 2 - float(position_m[1]) / PX_TO_M)
 
 
+def plane_pixel(
+    ray_origin: Sequence[float], ray_direction: Sequence[float], size_px: tuple[int, int]
+) -> tuple[float, float] | None:
+    """The pixel where a pointer's ray (world origin and direction) meets the annotation
+    plane; None when the ray runs parallel to it."""
+    oz, dz = float(ray_origin[2]), float(ray_direction[2])
+    if abs(dz) < PARALLEL_RAY:
+        return None
+    t = (PLANE_Z_M - oz) / dz
+    point = (ray_origin[0] + t * ray_direction[0], ray_origin[1] + t * ray_direction[1])
+    return pixel_of(point, size_px)
+
+
+def box_under(pixel: tuple[float, float], shown: Sequence[Shown]) -> Shown | None:
+    """The smallest box containing `pixel` (None: none does)."""
+    u, v = pixel
+    inside = [
+        s for s in shown if s.box_px[0] <= u <= s.box_px[2] and s.box_px[1] <= v <= s.box_px[3]
+    ]
+    return min(
+        inside,
+        key=lambda s: (s.box_px[2] - s.box_px[0]) * (s.box_px[3] - s.box_px[1]),
+        default=None,
+    )
+
+
 def box_from_corners(
     a: tuple[float, float], b: tuple[float, float], size_px: tuple[int, int]
 ) -> Box:
@@ -117,15 +144,8 @@ def drag_action(
             for k, (cu, cv) in enumerate(_corners(s.box_px)):
                 if abs(cu - u) <= CORNER_GRAB_PX and abs(cv - v) <= CORNER_GRAB_PX:
                     return DragAction("corner", s.track_id, k)
-    inside = [
-        s for s in shown if s.box_px[0] <= u <= s.box_px[2] and s.box_px[1] <= v <= s.box_px[3]
-    ]
-    if inside:
-        smallest = min(
-            inside, key=lambda s: (s.box_px[2] - s.box_px[0]) * (s.box_px[3] - s.box_px[1])
-        )
-        return DragAction("move", smallest.track_id)
-    return DragAction("draw")
+    under = box_under(start_px, shown)
+    return DragAction("draw") if under is None else DragAction("move", under.track_id)
 
 
 def dragged_box(

@@ -14,9 +14,11 @@ from app.annotation_view import (
     SELECTED_COLOUR,
     DragAction,
     annotated_picture,
+    box_under,
     drag_action,
     dragged_box,
     pixel_of,
+    plane_pixel,
     snapped_distance_m,
 )
 from core.annotation.model import Shown
@@ -37,6 +39,17 @@ def test_the_plane_maps_to_pixels() -> None:
     assert pixel_of((1.0, -1.0, 50.0), SIZE) == pytest.approx(
         (320 + 1 / PX_TO_M, 240 + 1 / PX_TO_M)
     )
+
+
+def test_a_pointer_ray_meets_the_plane_and_selects_the_smallest_box_under_it() -> None:
+    # straight down from 10 m above the plane's centre: the centre pixel
+    assert plane_pixel((0.0, 0.0, 60.0), (0.0, 0.0, -1.0), SIZE) == (320.0, 240.0)
+    # 45 degrees toward +x from 1 m above: 1 m right of the centre, 100 px at PX_TO_M
+    above = (0.0, 0.0, 50.0 + 1.0)
+    assert plane_pixel(above, (0.7071, 0.0, -0.7071), SIZE) == pytest.approx((420.0, 240.0))
+    assert plane_pixel(above, (1.0, 0.0, 0.0), SIZE) is None  # parallel
+    boxes = [shown(1, (100, 100, 200, 200)), shown(2, (120, 120, 140, 140))]
+    assert box_under((130, 130), boxes) == boxes[1] and box_under((10, 10), boxes) is None
 
 
 def test_what_a_drag_does() -> None:
