@@ -101,6 +101,7 @@ class AnnotationPanel:
         self._drag: tuple[DragAction, Box | None, tuple[float, float]] | None = None
         self._image: viser.ImageHandle | None = None
         self._aimed = False  # the 3D camera looks down on the plane
+        self._following = False  # an engine track is being followed over a clip
         # what this tab last showed, and its revision: the person acts on it, so clicks are
         # tested against it and edits are built from it and based on that revision
         self._seen = Annotations()
@@ -136,6 +137,23 @@ class AnnotationPanel:
             self._upload = gui.add_upload_button(
                 "Import a file (replaces all)", hint="undo brings the old annotations back"
             )
+        # what changes the annotations: disabled when the store refuses edits (viser's button
+        # groups cannot be; an edit from them is refused with the reason)
+        self._edit_controls = (
+            self._cls,
+            self._continue,
+            self._occluded,
+            self._truncated,
+            self._radar_seen,
+            self._interpolate,
+            self._snap,
+            self._detection,
+            self._done,
+            self._range,
+            self._engine_track,
+            self._follow,
+            self._upload,
+        )
         self._on.on_update(lambda _: self._toggle())
         self._cls.on_update(lambda event: self._from_user(event, self._set_class))
         self._continue.on_update(lambda event: self._from_user(event, self._pick_track))
@@ -326,6 +344,10 @@ class AnnotationPanel:
             return
         kind, _, box = track
         args = (store.folder, self._params(), *frames, self._frame, box, kind)
+        with self._lock:
+            if self._following:
+                return  # one at a time
+            self._following = True
         self._follow.disabled = True
         threading.Thread(target=self._follow_track, args=args, daemon=True).start()
 
@@ -355,6 +377,7 @@ class AnnotationPanel:
                     "green",
                 )
         finally:
+            self._following = False
             self._follow.disabled = False
 
     def _send_download(self) -> None:
@@ -549,6 +572,10 @@ class AnnotationPanel:
             snapshot = (Annotations(), 0) if store is None else store.snapshot()
             self._seen, self._seen_revision = snapshot
         ann = self._seen
+        editable = store is not None and store.read_only_reason is None
+        for control in self._edit_controls:
+            if control.disabled == editable:
+                control.disabled = not editable
         if store is None:
             self._status.content = "This recording cannot be annotated here."
         elif store.read_only_reason is not None:

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from app_fakes import Recordings
 from browser_page import TIMEOUT_MS, camera_src, serving, set_field
 from playwright.sync_api import Browser, Page
 
@@ -192,3 +193,20 @@ def test_accept_an_engine_track_download_and_import_a_file(
         page.wait_for_timeout(SETTLE_MS)
         tracks = json.loads((recording / "groundtruth.json").read_text())["tracks"]
         assert len(tracks) == 2 and [k["frame"] for k in tracks[1]["keyframes"]] == [55]
+
+
+def test_a_generated_truth_opens_read_only_with_its_reason(
+    recordings: Recordings, page: Page
+) -> None:
+    truth = recordings.root / recordings.name / "groundtruth.json"
+    before = truth.read_bytes()
+    with serving(page, recordings.root, recordings.name):
+        camera_src(page)
+        page.get_by_text("Annotation", exact=True).click()
+        page.wait_for_timeout(FOLDER_OPEN_MS)
+        page.get_by_label("annotate", exact=True).check()
+        page.get_by_text("Read-only:").wait_for(timeout=TIMEOUT_MS)
+        page.get_by_text("format_version 1").first.wait_for(timeout=TIMEOUT_MS)
+        assert page.get_by_role("button", name="Accept it over the frames").is_disabled()
+        assert page.get_by_role("button", name="Download the annotations").is_enabled()
+    assert truth.read_bytes() == before
