@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 
 from core.io.errors import RecordingError
 from core.io.manifest import MANIFEST_NAME, load_manifest, manifest_to_dict, parse_manifest
+from tests.core.arbitrary import values
 
 EXAMPLES = int(os.environ.get("FUZZ_EXAMPLES", "200"))
 FUZZ = settings(
@@ -56,21 +57,6 @@ VALID: dict[str, Any] = {
     "time_offsets_ns": {"camera": 0, "radar": -5, "can": 7},
     "max_radar_skew_ms": 25,
 }
-
-scalars = st.one_of(
-    st.none(),
-    st.booleans(),
-    st.integers(-(2**70), 2**70),
-    st.floats(allow_nan=True, allow_infinity=True),
-    st.text(max_size=12),
-)
-values = st.recursive(
-    scalars,
-    lambda inner: (
-        st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=8), inner, max_size=4)
-    ),
-    max_leaves=10,
-)
 
 
 def paths(tree: Any, prefix: tuple[Any, ...] = ()) -> list[tuple[Any, ...]]:
