@@ -56,7 +56,6 @@ import contextlib
 import dataclasses
 import difflib
 import fcntl
-import hashlib
 import itertools
 import json
 import logging
@@ -78,7 +77,7 @@ from core.evaluation.evaluate import PEDESTRIAN_STAGES, RecordingReport, evaluat
 from core.evaluation.objects import BoxScore
 from core.evaluation.report import Table, figures_json
 from core.io.errors import RecordingError
-from core.params import Params, ParamsError, load_params, to_dict
+from core.params import Params, ParamsError, load_params, params_hash
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -90,7 +89,6 @@ DEFAULT_METRIC = "vehicles.events.refined_share"  # paper 001, table I: refined 
 DEFAULT_GOAL: Goal = "max"
 DEFAULT_WORKERS = 2  # of a LocalCluster
 RESULTS_FORMAT_VERSION = 1
-ID_HEX_DIGITS = 10  # of a parameter set's SHA-256: 40 bits, no clash among thousands of sets
 WORST_FRAMES = 5  # frames listed per set
 CONNECT_TIMEOUT_S = 10.0  # to reach a scheduler given with --scheduler
 # figures a sweep never has: it does not time (module docstring)
@@ -300,9 +298,7 @@ def _parameter_set(
         given = ", ".join(f"{n}={v!r}" for n, v in zip(names, combination, strict=True))
         raise SweepError(f"{p}: {section}: the set {given}: {err}") from None
     values = [(name, params.value_of(name)) for name in names]
-    text = json.dumps(to_dict(params), sort_keys=True)
-    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:ID_HEX_DIGITS]
-    return ParameterSet(digest, tuple(values), params)
+    return ParameterSet(params_hash(params), tuple(values), params)
 
 
 # --- the metric -----------------------------------------------------------------------------

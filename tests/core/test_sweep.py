@@ -26,7 +26,7 @@ from core.evaluation.evaluate import (
 )
 from core.evaluation.objects import BoxScore, RailScore
 from core.evaluation.vehicles import EventStats, FrameStats
-from core.params import Params, save_params
+from core.params import HASH_HEX_DIGITS, Params, save_params
 from core.sweep import ResultsFile, SweepError, load_sweep
 from core.synth.generate import generate
 
@@ -82,7 +82,7 @@ def test_a_sets_id_is_stable_and_follows_the_base(tmp_path: Path) -> None:
     grid = "grid:\n  vehicle.refined_error_m: [0.3]\n"
     first = load_sweep(_write(tmp_path / "a.yaml", grid)).sets[0]
     again = load_sweep(_write(tmp_path / "b.yaml", grid + "goal: min\n")).sets[0]
-    assert first.id == again.id and len(first.id) == sweep.ID_HEX_DIGITS
+    assert first.id == again.id and len(first.id) == HASH_HEX_DIGITS
     save_params(Params().with_value("pitch.lines_kept", 9), tmp_path / "base.yaml")
     based = load_sweep(_write(tmp_path / "c.yaml", "base: base.yaml\n" + grid)).sets[0]
     assert based.params.pitch.lines_kept == 9 and based.values == first.values
