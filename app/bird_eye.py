@@ -335,6 +335,35 @@ class BirdEyeScene:
         return _Nodes(ground, ego, radar, tracks, vehicles, labels)
 
 
+class BirdEyeViews:
+    """A's bird's-eye view and B's beside it on one client's scene ("/bird_eye_a",
+    "/bird_eye_b"); the client's camera is pointed at them when their number changes."""
+
+    def __init__(self, client: viser.ClientHandle) -> None:
+        self._camera = client.camera
+        self._scenes = (
+            BirdEyeScene(client.scene, "/bird_eye_a"),
+            BirdEyeScene(client.scene, "/bird_eye_b"),
+        )
+        self._aimed_at = 0  # views the camera was last pointed at
+
+    def show(self, views: tuple[tuple[BirdEyeGeometry, RgbImage], ...], params: Params) -> None:
+        """Draw `views` (A's, then B's; none: nothing) under A's `params`."""
+        for scene, (geometry, texture) in zip(self._scenes, views, strict=False):
+            scene.show(geometry, texture)
+        for scene in self._scenes[len(views) :]:
+            scene.remove()
+        if views and len(views) != self._aimed_at:
+            centre_y_m = views[-1][0].texture_position_m[1] / 2
+            top_down_view(self._camera, params, centre_y_m, len(views))
+        self._aimed_at = len(views)
+
+    def remove(self) -> None:
+        for scene in self._scenes:
+            scene.remove()
+        self._aimed_at = 0
+
+
 def _tuple3(values: FloatArray) -> tuple[float, float, float]:
     return float(values[0]), float(values[1]), float(values[2])
 

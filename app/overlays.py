@@ -74,6 +74,9 @@ INTERSECTION_COLOUR: Rgb = (255, 40, 40)  # red circles
 CALIBRATED_VP_COLOUR: Rgb = (0, 220, 0)  # green cross
 VANISHING_POINT_COLOUR: Rgb = (255, 40, 40)  # red cross
 
+# the "rejected" layer's pedestrian candidates: those a fusion filter rejected
+REJECTED_BY_FUSION = tuple(v for v in FUSION_VERDICTS if v != "pedestrian")
+
 BOX_THICKNESS_PX = 2
 STRIP_ALPHA = 0.25  # share of the grey in the translucent pedestrian strip
 HATCH_STEP_PX = 8  # distance between hatching lines along a row
@@ -380,7 +383,12 @@ def _areas_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
 
 
 def _vehicles_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
-    return draw_vehicle_boxes(rgb, r.vehicle.vehicles, r.vehicle.targets)
+    return draw_vehicle_boxes(rgb, r.vehicle.vehicles)
+
+
+def _rejected_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
+    out = draw_vehicle_boxes(rgb, (), r.vehicle.targets)
+    return draw_pedestrians(out, r.pedestrian.candidates, REJECTED_BY_FUSION)
 
 
 def _rails_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
@@ -392,7 +400,7 @@ def _strip_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
 
 
 def _pedestrians_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
-    return draw_pedestrians(rgb, r.pedestrian.candidates, FUSION_VERDICTS)
+    return draw_pedestrians(rgb, r.pedestrian.candidates, ("pedestrian",))
 
 
 def _pruned_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
@@ -414,6 +422,7 @@ LAYERS: Mapping[str, Layer] = {
     "pitch": _pitch_layer,
     "guard rails": _rails_layer,
     "pruned pedestrians": _pruned_layer,
+    "rejected": _rejected_layer,
     "pedestrians": _pedestrians_layer,
     "vehicles": _vehicles_layer,
     "radar": _radar_layer,

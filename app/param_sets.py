@@ -122,6 +122,10 @@ class ParamSets:
             raise ParamsError("swap: there is no set B; switch comparing on first")
         self._change("swap A and B", replace(self._sets, a=self._sets.b, b=self._sets.a))
 
+    def open_link(self, a: Params, b: Params | None) -> None:
+        """The sets a view link carries (one undoable change), A edited."""
+        self._change("the link's parameters", Sets(a, b))
+
     # --- history ------------------------------------------------------------------------
     def undo(self) -> str | None:
         return self._history.undo()

@@ -10,11 +10,12 @@ stays up.
 
 from __future__ import annotations
 
+import functools
 import logging
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import viser
@@ -22,10 +23,13 @@ import viser
 from app.catalog import list_recordings, resolve_recording
 from app.engines import ClientEngines, FrameCache
 from app.metrics_panel import Evaluate
+from app.page_url import read_page, show_query
+from app.presenter import PresenterSession
 from app.presets import PresetStore
 from app.session import ClientSession
 from app.state import ViewState
 from app.view import CanSeries, FrameSource, FrameView, can_series, render_view
+from app.view_link import ViewLink, link_query, parse_link_query
 from app.worker import RenderWorker
 from core.annotation.store import AnnotationStore
 from core.engine import FusionEngine
@@ -37,6 +41,7 @@ from core.params import Params
 log = logging.getLogger(__name__)
 
 DriveOpener = Callable[[Path], FrameSource]
+Session = ClientSession | PresenterSession
 PARAMETER_SETS = ("A", "B")  # a client's engines are keyed (client id, set)
 
 
@@ -60,7 +65,9 @@ class InspectorServer:
     """The inspector on `host:port` (port 0: any free port) for recordings under `recordings_root`.
 
     `recording` names the recording new clients see first (default: the first by name);
-    `presets` is the folder parameter presets are saved in (the only place it writes).
+    `presets` is the folder parameter presets are saved in (the only place it writes);
+    `present`: every tab shows the presenter view and cannot leave it (`fusionscope serve
+    --present`). A tab opened with a view link (`app.view_link`) in its URL shows that view.
     Raises ValueError when the root is not a folder or `recording` is not under it.
     """
 
@@ -73,6 +80,7 @@ class InspectorServer:
         open_drive: DriveOpener = open_drive,
         *,
         presets: Path,
+        present: bool = False,
     ) -> None:
         self.recordings_root = Path(recordings_root).resolve()
         self.recordings = list_recordings(self.recordings_root)
@@ -83,8 +91,9 @@ class InspectorServer:
         self.requested_port = port
         self._open_drive = open_drive
         self.presets = PresetStore(presets)
+        self.present = present
         self._drives: dict[str, _OpenDrive] = {}
-        self._sessions: dict[int, ClientSession] = {}
+        self._sessions: dict[int, Session] = {}
         self._lock = threading.Lock()
         self._server: viser.ViserServer | None = None
 
@@ -137,18 +146,72 @@ class InspectorServer:
 
     # --- clients ------------------------------------------------------------------------
     def _connect(self, client: viser.ClientHandle) -> None:
+        """A new tab: the view its URL carries (read from the page), else a new one."""
+        try:
+            query = read_page(client, "location.search")
+        except (TimeoutError, RuntimeError):
+            log.warning("the URL of client %d could not be read", client.client_id)
+            query = ""
+        link, problems = parse_link_query(query)
+        if link.recording is not None and link.recording not in self.recordings:
+            problems += (f"recording: no recording {link.recording!r} here",)
+            link = replace(link, recording=None)
+        if self.present or link.present:
+            self._open_presenter(client, link)
+        else:
+            self._open_inspector(client, link)
+        if problems:
+            client.add_notification(
+                "Parts of the link were left out", "; ".join(problems), color="yellow"
+            )
+
+    def _open_inspector(self, client: viser.ClientHandle, link: ViewLink) -> None:
+        """The full inspector in `client`'s tab, showing `link`."""
+        recording = link.recording or self.default_recording
         session = ClientSession(
-            client, self.recordings, self.default_recording, self._show_recording, self.presets
+            client, self.recordings, recording, self._show_recording, self.presets, self._present
         )
         with self._lock:
             self._sessions[client.client_id] = session
-        if self.default_recording is None:
+        if recording is None:
             session.show_error(
                 "No recordings to show",
                 f"no folder with a recording.yaml under {self.recordings_root}",
             )
         else:
-            self._show_recording(session, self.default_recording)
+            self._show_recording(session, recording, link)
+
+    def _open_presenter(self, client: viser.ClientHandle, link: ViewLink) -> None:
+        """The presenter view in `client`'s tab, showing `link`."""
+        on_leave = None if self.present else self._inspect
+        session = PresenterSession(client, link, on_leave)
+        with self._lock:
+            self._sessions[client.client_id] = session
+        recording = link.recording or self.default_recording
+        if recording is None:
+            session.show_error("No recordings to show", f"none under {self.recordings_root}")
+            return
+        entry = self._open(session, recording)
+        if entry is not None:
+            client_id = client.client_id
+            request = functools.partial(entry.worker.submit, client_id)
+            session.show_drive(recording, len(entry.drive), entry.drive.frame_rate_hz, request)
+        show_query(client, link_query(replace(session.link(), present=True)))
+
+    def _present(self, session: ClientSession) -> None:
+        """An inspector tab becomes a presenter of what it shows."""
+        self._switch(session, lambda client: self._open_presenter(client, session.link()))
+
+    def _inspect(self, session: PresenterSession) -> None:
+        """A presenter tab goes back to the full inspector, on what it showed."""
+        self._switch(session, lambda client: self._open_inspector(client, session.link()))
+
+    def _switch(self, session: Session, open_view: Callable[[viser.ClientHandle], None]) -> None:
+        session.close()
+        client = session.client
+        client.gui.reset()
+        client.scene.reset()
+        open_view(client)
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
@@ -161,28 +224,39 @@ class InspectorServer:
             for which in PARAMETER_SETS:
                 entry.engines.forget((client.client_id, which))
 
-    def _show_recording(self, session: ClientSession, name: str) -> None:
+    def _open(self, session: Session, name: str) -> _OpenDrive | None:
+        """The open drive `name`; None, with the reason on the session's page, when it
+        cannot be opened."""
         try:
-            entry = self._drive(name)
+            return self._drive(name)
         except (RecordingError, ValueError) as err:
             session.show_error(f"Cannot show this recording: {name}", str(err))
-            return
         except Exception as err:  # any reader failure must reach the page, not end the server
             log.exception("opening recording %s failed", name)
             session.show_error(
                 f"Cannot show this recording: {name}", f"{type(err).__name__}: {err}"
             )
+        return None
+
+    def _show_recording(
+        self, session: ClientSession, name: str, link: ViewLink | None = None
+    ) -> None:
+        """Recording `name` in an inspector tab, at the view `link` describes (None: from
+        its first frame, with the tab's layers and parameters)."""
+        entry = self._open(session, name)
+        if entry is None:
             return
         client_id = session.client.client_id
         session.show_drive(
             name,
             len(entry.drive),
             entry.drive.frame_rate_hz,
-            lambda state: entry.worker.submit(client_id, state),
+            functools.partial(entry.worker.submit, client_id),
             entry.drive.notes,
             entry.can,
             entry.evaluate,
             entry.annotations,
+            link,
         )
 
     # --- drives -------------------------------------------------------------------------
@@ -253,10 +327,18 @@ def _open_annotations(path: Path) -> AnnotationStore | None:
 
 
 def serve(
-    recordings_root: Path, recording: str | None, host: str, port: int, presets: Path
+    recordings_root: Path,
+    recording: str | None,
+    host: str,
+    port: int,
+    presets: Path,
+    present: bool = False,
 ) -> None:
-    """Run the inspector until Ctrl-C; presets are saved in the folder `presets`."""
-    inspector = InspectorServer(recordings_root, recording, host, port, presets=presets)
+    """Run the inspector until Ctrl-C; presets are saved in the folder `presets`; `present`:
+    every tab is a presenter view."""
+    inspector = InspectorServer(
+        recordings_root, recording, host, port, presets=presets, present=present
+    )
     bound = inspector.start()
     print(f"fusionscope inspector: http://{host}:{bound}  (Ctrl-C to stop)")
     try:

@@ -18,12 +18,14 @@ import viser
 import viser.uplot
 
 from app.annotate import AnnotationPanel
-from app.bird_eye import BirdEyeScene, top_down_view
+from app.bird_eye import BirdEyeViews
 from app.history import History
 from app.metrics import SliderMark
 from app.metrics_panel import Evaluate, MetricsPanel
+from app.page_url import copy_page_url, read_page, show_query
 from app.param_sets import ParamSets, Sets
 from app.params_panel import NoticeColour, ParamsPanel
+from app.player import Player
 from app.presets import PresetStore
 from app.state import Layers, Panels, ViewState
 from app.view import (
@@ -36,6 +38,7 @@ from app.view import (
     median_timings,
     timings_markdown,
 )
+from app.view_link import Clip, ViewLink, link_query, parse_clip
 from core.annotation.store import AnnotationStore
 from core.engine import StageTimings
 from core.params import ParamsError
@@ -50,6 +53,7 @@ PANEL_LABELS = {"bird_eye": "bird's-eye view (3D)", "can": "CAN speed and yaw ra
 # the right-hand panel, top to bottom
 CAMERA_ORDER, DIFF_ORDER, STAGE_CHOICE_ORDER, STAGE_ORDER, CAN_ORDER = range(5)
 ANNOTATION_ORDER = 6.5  # the Annotation folder: after Metrics (6), before Keys (7)
+DEMO_ORDER = 2.5  # the Share and demo folder: under the Timeline (2)
 TIMINGS_WINDOW = 50  # frames in the running median of the stage timings
 NOTICE_SECONDS = 8.0
 
@@ -58,7 +62,7 @@ def _run_command(action: Callable[[], object], _: object) -> None:
     action()
 
 
-def _escape_markdown(text: str) -> str:
+def escape_markdown(text: str) -> str:
     """`text` shown literally by the markdown widget (file paths, reader messages)."""
     return "".join("\\" + c if c in MARKDOWN_SPECIALS else c for c in text)
 
@@ -78,6 +82,7 @@ class ClientSession:
         selected: str | None,
         on_pick_recording: Callable[[ClientSession, str], None],
         presets: PresetStore,
+        on_present: Callable[[ClientSession], None],
     ) -> None:
         self.client = client
         self.recording: str | None = None
@@ -86,9 +91,11 @@ class ClientSession:
         self._frame_count = 0
         self._frame_rate_hz = 0.0
         self._request: Callable[[ViewState], None] | None = None
-        self._stop_playing = threading.Event()
-        self._player: threading.Thread | None = None
+        self._player = Player(f"player-{client.client_id}")
         self._on_pick_recording = on_pick_recording
+        self._on_present = on_present
+        self._clip: Clip | None = None  # None: the whole drive
+        self._shown_query = ""  # the page URL's query, as last set
         self._can: CanSeries | None = None
         self._recent_timings: deque[StageTimings] = deque(maxlen=TIMINGS_WINDOW)
         self._history = History()  # parameter changes and annotation edits, one stack
@@ -105,6 +112,7 @@ class ClientSession:
         )
         self._picker.on_update(lambda _: self._on_pick_recording(self, self._picker.value))
         self._timeline: viser.GuiFolderHandle | None = None
+        self._demo: viser.GuiFolderHandle | None = None
         self._slider: viser.GuiSliderHandle[int] | None = None
         self._play: viser.GuiButtonHandle | None = None
         self._readout: viser.GuiMarkdownHandle | None = None
@@ -155,11 +163,7 @@ class ClientSession:
         self._timings: viser.GuiMarkdownHandle | None = None
         self._stage_image: viser.GuiImageHandle | None = None
         self._metrics: MetricsPanel | None = None
-        self._bird_eyes = (
-            BirdEyeScene(client.scene, "/bird_eye_a"),
-            BirdEyeScene(client.scene, "/bird_eye_b"),
-        )
-        self._views_aimed_at = 0  # bird's-eye views the 3D camera was last pointed at
+        self._bird_eyes = BirdEyeViews(client)
 
     # --- what the server tells this client ----------------------------------------------
     def show_error(self, headline: str, detail: str = "") -> None:
@@ -167,7 +171,7 @@ class ClientSession:
         self._drop_drive()
         self._camera_panel.visible = False
         first, _, rest = detail.partition("\n")
-        text = f"**{_escape_markdown(headline)}**\n\n{_escape_markdown(first)}"
+        text = f"**{escape_markdown(headline)}**\n\n{escape_markdown(first)}"
         if rest.strip():
             text += f"\n\n```text\n{rest}\n```"
         self._message.content = text
@@ -182,8 +186,10 @@ class ClientSession:
         can: CanSeries | None = None,
         evaluate: Evaluate | None = None,
         annotations: AnnotationStore | None = None,
+        link: ViewLink | None = None,
     ) -> None:
-        """Build the timeline for a drive of `frame_count` frames and render its first frame.
+        """Build the timeline for a drive of `frame_count` frames and render its first frame
+        (or the view `link` describes: frame, clip, layers, panels, parameter sets).
 
         notes: what the viewer should know about the recording (assumptions, what was skipped
         on reading), listed under its name. can: its CAN signals for the plot. evaluate:
@@ -203,8 +209,8 @@ class ClientSession:
         self._annotation.open(annotations, frame_count)
         self._camera_panel.visible = True
         self._message.content = (
-            f"**{_escape_markdown(name)}** — {frame_count} frames at {frame_rate_hz:.1f} Hz"
-        ) + "".join(f"\n\n- {_escape_markdown(note)}" for note in notes)
+            f"**{escape_markdown(name)}** — {frame_count} frames at {frame_rate_hz:.1f} Hz"
+        ) + "".join(f"\n\n- {escape_markdown(note)}" for note in notes)
         if frame_count == 0:
             return
         duration_s = (frame_count - 1) / frame_rate_hz if frame_rate_hz > 0 else 0.0
@@ -237,7 +243,85 @@ class ClientSession:
         self._play.on_click(lambda _: self.set_playing(not self._state.playing))
         step_back.on_click(lambda _: self.step(-1))
         step_on.on_click(lambda _: self.step(+1))
+        self._add_demo_folder(gui)
+        if link is None:
+            self._submit()
+        else:
+            self._open_link(link)
+
+    def link(self) -> ViewLink:
+        """What this tab shows, as a view link."""
+        s = self._state
+        return ViewLink(
+            self.recording, s.frame, s.layers, s.panels, s.params, s.params_b, self._clip
+        )
+
+    def _open_link(self, link: ViewLink) -> None:
+        """Show the view `link` describes on the open drive (its frame and clip clamped)."""
+        last = self._frame_count - 1
+        if link.clip is not None and link.clip[1] <= last:
+            self._set_clip(link.clip)
+        for name, box in self._layer_boxes.items():
+            box.value = getattr(link.layers or Layers(), name)  # type: ignore[misc]
+        panels = link.panels or Panels()
+        for name, box in self._panel_boxes.items():
+            box.value = getattr(panels, name)  # type: ignore[misc]
+        self._stage_choice.value = STAGE_TITLES[panels.stage]  # type: ignore[misc]
+        self._param_sets.open_link(link.params, link.params_b)
+        self.go_to(min(link.frame or 0, last))
         self._submit()
+
+    def _add_demo_folder(self, gui: viser.GuiApi) -> None:
+        """Share this view, present it, export the clip."""
+        with gui.add_folder("Share and demo", order=DEMO_ORDER, expand_by_default=False) as f:
+            self._demo = f
+            self._clip_field = gui.add_text(
+                "clip frames",
+                f"0-{self._frame_count - 1}",
+                hint="first-last frame the presenter loops over and the exports cover",
+            )
+            copy = gui.add_button("Copy link", icon=viser.Icon.LINK)
+            self._link_text = gui.add_markdown("")
+            present = gui.add_button("Present this view", icon=viser.Icon.PRESENTATION)
+        self._clip_field.on_update(lambda event: self._clip_typed(event.target.value))
+        copy.on_click(lambda _: self._copy_link())
+        present.on_click(lambda _: self._on_present(self))
+
+    def _clip_typed(self, text: str) -> None:
+        try:
+            clip = parse_clip(text.strip())
+            if clip[1] >= self._frame_count:
+                raise ValueError(f"expected frames up to {self._frame_count - 1}, got {text!r}")
+        except ValueError as err:
+            self.notify("Clip not changed", f"clip frames: {err}")
+            return
+        self._set_clip(clip)
+        self._show_link()
+
+    def _set_clip(self, clip: Clip) -> None:
+        self._clip = None if clip == (0, self._frame_count - 1) else clip
+        text = f"{clip[0]}-{clip[1]}"
+        if self._clip_field.value != text:
+            self._clip_field.value = text  # type: ignore[misc]
+
+    def _copy_link(self) -> None:
+        self._show_link()
+        copy_page_url(self.client)
+        try:
+            url = read_page(self.client, "location.href")
+        except (TimeoutError, RuntimeError) as err:
+            self.notify("The link could not be read", str(err))
+            return
+        self._link_text.content = f"Copied: `{url}`"
+
+    def _show_link(self) -> None:
+        """Make the page's URL carry this view (not while playing: it changes every frame)."""
+        if self._state.playing or self.recording is None:
+            return
+        query = link_query(self.link())
+        if query != self._shown_query:
+            self._shown_query = query
+            show_query(self.client, query)
 
     def show_view(self, recording: str, view: FrameView) -> None:
         """Put a rendered frame and its read-out on the page together (if still wanted)."""
@@ -256,7 +340,7 @@ class ClientSession:
                 self._diff.content = view.diff
             self._show_can(view.frame)
             self._show_stage(view)
-            self._show_bird_eyes(view)
+            self._bird_eyes.show(view.bird_eyes, self._state.params)
             self._readout.content = f"`{view.readout}`"
         if view.annotation is not None:
             self._annotation.show_frame(view.frame, *view.annotation)
@@ -296,19 +380,6 @@ class ClientSession:
                 order=CAN_ORDER,
             )
 
-    def _show_bird_eyes(self, view: FrameView) -> None:
-        """A's bird's-eye view and B's beside it in the 3D scene; the camera is pointed at
-        them when their number changes."""
-        for scene, (geometry, texture) in zip(self._bird_eyes, view.bird_eyes, strict=False):
-            scene.show(geometry, texture)
-        for scene in self._bird_eyes[len(view.bird_eyes) :]:
-            scene.remove()
-        if view.bird_eyes and len(view.bird_eyes) != self._views_aimed_at:
-            centre_y_m = view.bird_eyes[-1][0].texture_position_m[1] / 2
-            views = len(view.bird_eyes)
-            top_down_view(self.client.camera, self._state.params, centre_y_m, views)
-        self._views_aimed_at = len(view.bird_eyes)
-
     def _show_stage(self, view: FrameView) -> None:
         """The stage picture chosen (or the timings table) under the camera."""
         gui = self.client.gui
@@ -338,7 +409,7 @@ class ClientSession:
         """Say in the read-out what went wrong with `frame` (the image keeps the last frame)."""
         if recording != self.recording or self._readout is None:
             return
-        self._readout.content = f"**frame {frame} {what}:** {_escape_markdown(message)}"
+        self._readout.content = f"**frame {frame} {what}:** {escape_markdown(message)}"
 
     # --- controls -> state ----------------------------------------------------------------
     def go_to(self, frame: int) -> None:
@@ -366,16 +437,9 @@ class ClientSession:
                 return
             self._state = replace(self._state, playing=playing)
             if playing:
-                self._stop_playing = threading.Event()
-                self._player = threading.Thread(
-                    target=self._play_loop,
-                    args=(self._stop_playing, 1.0 / self._frame_rate_hz),
-                    name=f"player-{self.client.client_id}",
-                    daemon=True,
-                )
-                self._player.start()
+                self._player.start(self._frame_period_s, self._play_step)
             else:
-                self._stop_playing.set()
+                self._player.stop()
         if self._play is not None:
             self._play.label = "Pause" if playing else "Play"
             self._play.icon = viser.Icon.PLAYER_PAUSE if playing else viser.Icon.PLAYER_PLAY
@@ -386,21 +450,22 @@ class ClientSession:
 
     def close(self) -> None:
         """The client left: stop playback."""
-        self._stop_playing.set()
+        self._player.stop()
 
     # --- internals ---------------------------------------------------------------------
-    def _play_loop(self, stop: threading.Event, period_s: float) -> None:
-        """Advance the state one frame per period (at the chosen rate) until paused or at
-        the last frame."""
-        while not stop.wait(period_s / self._rate_factor()):
-            if self._state.frame >= self._frame_count - 1:
-                self.set_playing(False)
-                return
-            self.step(+1)
-
-    def _rate_factor(self) -> float:
+    def _frame_period_s(self) -> float:
+        """Between two frames at the chosen rate of the drive's frame rate."""
         rate = self._rate
-        return 1.0 if rate is None else float(rate.value.rstrip("x"))
+        factor = 1.0 if rate is None else float(rate.value.rstrip("x"))
+        return 1.0 / (self._frame_rate_hz * factor)
+
+    def _play_step(self) -> bool:
+        """One frame on; at the last frame, pause and stop the player."""
+        if self._state.frame >= self._frame_count - 1:
+            self.set_playing(False)
+            return False
+        self.step(+1)
+        return True
 
     def _add_commands(self, gui: viser.GuiApi) -> None:
         """Keyboard commands (viser's command palette) and a panel that lists them."""
@@ -522,6 +587,7 @@ class ClientSession:
             request, state = self._request, self._state
         if request is not None:
             request(state)
+            self._show_link()
 
     def _drop_drive(self) -> None:
         self.set_playing(False)
@@ -531,15 +597,16 @@ class ClientSession:
             self._frame_count = 0
         if self._timeline is not None:
             self._timeline.remove()
+        if self._demo is not None:
+            self._demo.remove()
+            self._demo = None
         if self._metrics is not None:
             self._metrics.remove()
             self._metrics = None
         for handle in (self._image, self._diff, self._can_plot, self._timings, self._stage_image):
             if handle is not None:
                 handle.remove()
-        for scene in self._bird_eyes:
-            scene.remove()
-        self._views_aimed_at = 0
+        self._bird_eyes.remove()
         self._stage_image = None
         self._timeline = self._slider = self._play = self._readout = self._image = None
         self._timings = self._rate = self._diff = self._can_plot = None

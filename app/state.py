@@ -20,7 +20,9 @@ class Layers:
     areas: bool = False  # the search areas of the radar targets
     vehicles: bool = True  # vehicle boxes by verdict
     guardrails: bool = True  # guard-rail lines and areas skipped by overlap
-    pedestrians: bool = True  # pedestrian boxes kept, and rejected by a fusion filter
+    pedestrians: bool = True  # pedestrian boxes kept
+    rejected: bool = True  # with reasons: vehicle boxes the size filter dropped, pedestrians
+    # a fusion filter rejected
     pruned: bool = False  # pedestrian candidates the size and shape constraints dropped
     strip: bool = False  # the pedestrian search strip
     horizon: bool = True  # horizon, vanishing point and the pitch detector's lines

@@ -23,6 +23,7 @@ import numpy.typing as npt
 from app import draw, overlays, panels
 from app.annotation_view import SEED_KINDS, Seeds
 from app.bird_eye import BirdEyeGeometry, bird_eye_geometry
+from app.presenter_view import HeadlineFigures, headline_figures
 from app.state import Layers, ViewState
 from core.camera import CameraModel
 from core.compare import Detection, detections, diff_detections
@@ -53,6 +54,7 @@ OVERLAY_OF_LAYER = {
     "vehicles": "vehicles",
     "guardrails": "guard rails",
     "pedestrians": "pedestrians",
+    "rejected": "rejected",  # vehicle boxes and pedestrians, with the reason
     "pruned": "pruned pedestrians",
     "strip": "pedestrian strip",
     "horizon": "pitch",
@@ -94,7 +96,8 @@ class FrameView:
     as (geometry, ground texture) for A, and B beside it, when that panel is on; preview:
     a result in it is the engine's preview (`FusionEngine.preview`), to be replaced by the
     exact one; annotation: when the tab annotates, the bare frame as RGB and what the
-    engine found on it under A, to seed annotations from."""
+    engine found on it under A, to seed annotations from; figures: A's headline figures
+    (`app.presenter_view`)."""
 
     frame: int
     image: draw.RgbImage
@@ -105,6 +108,7 @@ class FrameView:
     bird_eyes: tuple[tuple[BirdEyeGeometry, draw.RgbImage], ...] = ()
     preview: bool = False
     annotation: tuple[draw.RgbImage, Seeds] | None = None
+    figures: HeadlineFigures | None = None
 
 
 PREVIEW_NOTE = "preview: replaying under the new values"
@@ -194,6 +198,7 @@ def render_view(
         bird_eyes,
         preview,
         annotation,
+        headline_figures(result),
     )
 
 

@@ -99,7 +99,7 @@ def parse_link_query(query: str) -> tuple[ViewLink, tuple[str, ...]]:
         panels=panels,
         params=_params(changes[A_PREFIX], "a", problems),
         params_b=_params(changes[B_PREFIX], "b", problems) if comparing else None,
-        clip=_parsed(lambda: _clip(values["clip"]), "clip", problems),
+        clip=_parsed(lambda: parse_clip(values["clip"]), "clip", problems),
         present=_parsed(lambda: _flag(values["present"]), "present", problems) or False,
     )
     return link, tuple(problems)
@@ -158,7 +158,8 @@ def _frame(text: str) -> int:
     return _whole(text, "a frame index")
 
 
-def _clip(text: str) -> Clip:
+def parse_clip(text: str) -> Clip:
+    """'first-last' frames (inclusive); ValueError saying what was expected."""
     first, dash, last = text.partition("-")
     if not dash:
         raise ValueError(f"expected first-last frames such as 30-89, got {text!r}")

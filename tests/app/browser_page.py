@@ -41,23 +41,35 @@ VISIBLE_IMG = "img[src^='blob:']:visible"
 
 
 def start(
-    root: Path, recording: str | None = None, opener: DriveOpener = open_drive
+    root: Path,
+    recording: str | None = None,
+    opener: DriveOpener = open_drive,
+    present: bool = False,
 ) -> InspectorServer:
     presets = Path(tempfile.mkdtemp(prefix="fusionscope-presets-"))
-    server = InspectorServer(root, recording, "127.0.0.1", 0, open_drive=opener, presets=presets)
+    server = InspectorServer(
+        root, recording, "127.0.0.1", 0, open_drive=opener, presets=presets, present=present
+    )
     server.start()
     return server
 
 
 @contextlib.contextmanager
 def serving(
-    page: Page, root: Path, recording: str | None = None, opener: DriveOpener = open_drive
+    page: Page,
+    root: Path,
+    recording: str | None = None,
+    opener: DriveOpener = open_drive,
+    *,
+    present: bool = False,
+    query: str = "",
 ) -> Iterator[InspectorServer]:
-    """An inspector on `root`, opened in `page`; on leaving, the page is saved to
-    SCREENSHOTS/<test>.png while the server still runs, then the server stops."""
-    server = start(root, recording, opener)
+    """An inspector on `root` (`present`: a presenter-only one), opened in `page` at the URL
+    query `query`; on leaving, the page is saved to SCREENSHOTS/<test>.png while the server
+    still runs, then the server stops."""
+    server = start(root, recording, opener, present)
     try:
-        page.goto(f"http://127.0.0.1:{server.port}/")
+        page.goto(f"http://127.0.0.1:{server.port}/{query}")
         yield server
     finally:
         test = os.environ.get("PYTEST_CURRENT_TEST", "page").split("::")[-1].split(" ")[0]
@@ -87,17 +99,16 @@ def pixels(image: Locator) -> str:
     return _digest(image)
 
 
+DIGEST_JS = """async i => { await i.decode(); const c = document.createElement('canvas');
+    c.width = i.naturalWidth; c.height = i.naturalHeight;
+    const g = c.getContext('2d'); g.drawImage(i, 0, 0);
+    const d = g.getImageData(0, 0, c.width, c.height).data;
+    let h = 0; for (let k = 0; k < d.length; k += 7) h = (h * 31 + d[k]) >>> 0;
+    return `${c.width}x${c.height}:${h}`; }"""
+
+
 def _digest(image: Locator) -> str:
-    return str(
-        image.evaluate(
-            """async i => { await i.decode(); const c = document.createElement('canvas');
-                c.width = i.naturalWidth; c.height = i.naturalHeight;
-                const g = c.getContext('2d'); g.drawImage(i, 0, 0);
-                const d = g.getImageData(0, 0, c.width, c.height).data;
-                let h = 0; for (let k = 0; k < d.length; k += 7) h = (h * 31 + d[k]) >>> 0;
-                return `${c.width}x${c.height}:${h}`; }"""
-        )
-    )
+    return str(image.evaluate(DIGEST_JS))
 
 
 def stage_picture(page: Page) -> Locator:

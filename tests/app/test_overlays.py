@@ -368,6 +368,20 @@ def test_every_layer_of_an_engine_frame_draws_on_a_copy() -> None:
     assert everything.shape == rgb.shape
 
 
+def test_what_was_found_and_what_was_rejected_are_separate_layers() -> None:
+    result = engine_result()
+    rgb = draw.grey_to_rgb(engine_image())
+    found = overlays.draw_layers(rgb, result, ["vehicles", "pedestrians"])
+    rejected = overlays.draw_layers(rgb, result, ["rejected"])
+    for colour in (overlays.VEHICLE_REJECTED_COLOUR, overlays.PEDESTRIAN_REJECTED_COLOUR):
+        assert not is_colour(found, colour).any()
+    assert is_colour(rejected, overlays.VEHICLE_REJECTED_COLOUR).any() or is_colour(
+        rejected, overlays.PEDESTRIAN_REJECTED_COLOUR
+    ).any()
+    for colour in (overlays.VEHICLE_COLOUR, overlays.PEDESTRIAN_COLOUR):
+        assert not is_colour(rejected, colour).any()
+
+
 def test_draw_layers_refuses_an_unknown_layer() -> None:
     with pytest.raises(ValueError, match=r"names: expected layers among .*'lanes'"):
         overlays.draw_layers(black(), engine_result(), ["radar", "lanes"])

@@ -1,0 +1,163 @@
+"""Demo mode in headless Chromium: the presenter view has no controls and plays its clip over
+and over beside a full inspector tab; a shared link opened in a new browser context shows the
+same frame with the same layers and parameters; a tab presents its view and comes back to it;
+the link is copied. Fixtures in conftest.py, helpers in browser_page.py."""
+
+from __future__ import annotations
+
+import contextlib
+import re
+
+from app_fakes import Recordings
+from browser_page import (
+    CAMERA_IMG,
+    DIGEST_JS,
+    SCREENSHOTS,
+    SETTLE_MS,
+    TIMEOUT_MS,
+    camera_src,
+    changed_pixels,
+    field,
+    pixels,
+    serving,
+    set_field,
+    stage_picture,
+)
+from playwright.sync_api import Browser, Locator, Page, expect
+from playwright.sync_api import Error as PlaywrightError
+from test_browser_tuning import XI, open_folders
+
+READOUT = re.compile(r"^frame \d+ / \d+ \|")
+
+
+def presenter_camera(page: Page) -> Locator:
+    """The presenter's camera picture: the widest picture (the legend is one too)."""
+    page.wait_for_function(
+        f'() => Array.from(document.querySelectorAll("{CAMERA_IMG}"))'
+        ".filter(i => i.complete && i.naturalWidth > 640).length === 1",
+        timeout=TIMEOUT_MS,
+    )
+    widths = page.locator(CAMERA_IMG).evaluate_all("images => images.map(i => i.naturalWidth)")
+    return page.locator(CAMERA_IMG).nth(widths.index(max(widths)))
+
+
+def playing_pixels(camera: Locator) -> str:
+    """A digest of the next picture that can be read whole (the page replaces the picture
+    ten times a second, and a read can catch its blob being revoked)."""
+    for _ in range(50):
+        with contextlib.suppress(PlaywrightError):
+            camera.page.wait_for_timeout(150)
+            return str(camera.evaluate(DIGEST_JS))
+    raise AssertionError(f"{camera}: no picture could be read in 50 tries")
+
+
+def no_controls(page: Page) -> None:
+    """The page shows no input of any kind (viser keeps hidden ones for its own settings)
+    and has no parameter, layer, annotation or timeline folder."""
+    assert page.locator("input:visible").count() == 0
+    for folder in ("Parameters", "Layers", "Annotation", "Timeline"):
+        assert page.get_by_text(folder, exact=True).count() == 0, folder
+
+
+def test_the_presenter_has_no_controls_and_plays_its_clip_over_and_over(
+    recordings: Recordings, page: Page
+) -> None:
+    with serving(page, recordings.root, recordings.name, present=True, query="?clip=3-5"):
+        page.get_by_text("frames 3–5 of 20").wait_for(timeout=TIMEOUT_MS)
+        camera = presenter_camera(page)
+        no_controls(page)
+        seen = [playing_pixels(camera) for _ in range(12)]
+        assert len(set(seen)) == 3  # the clip's three frames, over and over
+        assert "present=1" in page.url and "clip=3-5" in page.url
+        expect(page.get_by_text("nearest vehicle")).to_be_visible()
+        assert page.get_by_role("button", name="Back to the inspector").count() == 0
+
+
+def test_a_full_inspector_tab_works_beside_a_presenter_tab(
+    recordings: Recordings, page: Page, browser: Browser
+) -> None:
+    with serving(page, recordings.root, recordings.name, query="?present=1"):
+        camera = presenter_camera(page)
+        no_controls(page)
+        other = page.context.new_page()
+        other.goto(page.url.split("?")[0])
+        camera_src(other)
+        other.get_by_text("frame 0 /").wait_for(timeout=TIMEOUT_MS)
+        other.get_by_role("button", name="Step +1").click()
+        other.get_by_text("frame 1 /").wait_for(timeout=TIMEOUT_MS)
+        changed_pixels(page, camera, pixels(camera))  # the presenter still plays
+
+
+def test_a_shared_link_shows_the_same_view_in_a_new_browser_context(
+    recordings: Recordings, page: Page, browser: Browser
+) -> None:
+    with serving(page, recordings.root, recordings.name):
+        camera_src(page)
+        set_field(page, "go to time s", "1.2")
+        page.get_by_text("frame 12 /").wait_for(timeout=TIMEOUT_MS)
+        page.get_by_label("radar", exact=True).click()
+        open_folders(page, "Parameters", "motion_stereo")
+        set_field(page, XI, "80")
+        page.wait_for_url(re.compile(r"a\.motion_stereo\.threshold_xi=80"), timeout=TIMEOUT_MS)
+        page.wait_for_timeout(SETTLE_MS)  # the exact picture after the preview
+        shown = pixels(page.locator(CAMERA_IMG).first), pixels(stage_picture(page))
+        url = page.url
+        assert "frame=12" in url and "layers=areas" not in url and "radar" not in url
+
+        context = browser.new_context(viewport={"width": 1400, "height": 800})
+        try:
+            other = context.new_page()
+            other.goto(url)
+            camera_src(other)
+            other.get_by_text("frame 12 /").wait_for(timeout=TIMEOUT_MS)
+            other.wait_for_timeout(SETTLE_MS)
+            again = pixels(other.locator(CAMERA_IMG).first), pixels(stage_picture(other))
+            assert again == shown
+            assert not other.get_by_label("radar", exact=True).is_checked()
+            open_folders(other, "Parameters", "motion_stereo")
+            assert field(other, XI).input_value() == "80"
+            other.screenshot(path=str(SCREENSHOTS / "shared-link-opened.png"))
+        finally:
+            context.close()
+
+
+def test_a_tab_presents_its_view_and_comes_back_to_it(recordings: Recordings, page: Page) -> None:
+    with serving(page, recordings.root, recordings.name):
+        camera_src(page)
+        page.get_by_label("radar", exact=True).click()
+        open_folders(page, "Share and demo")
+        set_field(page, "clip frames", "4-9")
+        page.get_by_role("button", name="Present this view").click()
+        page.get_by_role("button", name="Back to the inspector").wait_for(timeout=TIMEOUT_MS)
+        page.get_by_text("frames 4–9 of 20").wait_for(timeout=TIMEOUT_MS)
+        no_controls(page)
+        page.wait_for_url(re.compile(r"present=1"), timeout=TIMEOUT_MS)
+
+        page.get_by_role("button", name="Back to the inspector").click()
+        page.get_by_text(READOUT).wait_for(timeout=TIMEOUT_MS)
+        frame = int(page.get_by_text(READOUT).inner_text().split()[1])
+        assert 4 <= frame <= 9  # where the presenter was, in the clip
+        assert not page.get_by_label("radar", exact=True).is_checked()
+        assert "present=1" not in page.url
+
+
+def test_copy_link_puts_the_views_url_on_the_clipboard(recordings: Recordings, page: Page) -> None:
+    page.context.grant_permissions(["clipboard-read", "clipboard-write"])
+    with serving(page, recordings.root, recordings.name):
+        camera_src(page)
+        page.get_by_role("button", name="Step +1").click()
+        page.get_by_text("frame 1 /").wait_for(timeout=TIMEOUT_MS)
+        open_folders(page, "Share and demo")
+        page.get_by_role("button", name="Copy link").click()
+        page.get_by_text("Copied:").wait_for(timeout=TIMEOUT_MS)
+        copied = page.evaluate("navigator.clipboard.readText()")
+        assert copied == page.url and "frame=1" in copied
+
+
+def test_a_link_with_parts_that_cannot_be_used_says_so_and_shows_the_rest(
+    recordings: Recordings, page: Page
+) -> None:
+    with serving(page, recordings.root, recordings.name, query="?frame=5&layers=lasers"):
+        page.get_by_text("frame 5 /").wait_for(timeout=TIMEOUT_MS)
+        page.get_by_text("Parts of the link were left out").wait_for(timeout=TIMEOUT_MS)
+        page.get_by_text(re.compile("layers: expected layer names")).wait_for(timeout=TIMEOUT_MS)
