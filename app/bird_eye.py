@@ -4,7 +4,8 @@ Two parts. `bird_eye_geometry` is pure: it places what a `core.engine.FrameResul
 (radar targets, vehicles, confirmed tracks), the ego car and the ground texture as numpy
 arrays, tested without a browser; the render worker runs it. `BirdEyeScene` sends that
 geometry to a viser scene on a fixed set of node names, updated in place frame after frame;
-`top_down_view` points a client's camera at it.
+`top_down_pose` is where a viewer's camera looks at it from, `top_down_view` points a
+client's camera there.
 
 Frame: the vehicle frame of `core.camera` and `core.tracking`, which is viser's world frame
 here: x forward, y left, z up, metres, origin on the ground under the rear axle. A scene
@@ -28,7 +29,7 @@ starting at the radar distance and extending away, as wide as vision measured th
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -354,8 +355,7 @@ class BirdEyeViews:
         for scene in self._scenes[len(views) :]:
             scene.remove()
         if views and len(views) != self._aimed_at:
-            centre_y_m = views[-1][0].texture_position_m[1] / 2
-            top_down_view(self._camera, params, centre_y_m, len(views))
+            top_down_view(self._camera, pose_of_views(views, params))
         self._aimed_at = len(views)
 
     def remove(self) -> None:
@@ -368,11 +368,18 @@ def _tuple3(values: FloatArray) -> tuple[float, float, float]:
     return float(values[0]), float(values[1]), float(values[2])
 
 
-def top_down_view(
-    camera: viser.CameraHandle, params: Params, centre_y_m: float = 0.0, views: int = 1
-) -> None:
-    """Point a client's camera from behind and above the ego car at the road ahead, so the
-    ego car and the ground texture of `params` fill the view, +z up.
+@dataclass(frozen=True)
+class CameraPose:
+    """Where a viewer's camera stands and looks, in the scene's metres, and which way is up."""
+
+    position_m: tuple[float, float, float]
+    look_at_m: tuple[float, float, float]
+    up: tuple[float, float, float] = UP_DIRECTION
+
+
+def top_down_pose(params: Params, centre_y_m: float = 0.0, views: int = 1) -> CameraPose:
+    """From behind and above the ego car at the road ahead, so the ego car and the ground
+    texture of `params` fill the view, +z up.
 
     centre_y_m: the lateral middle of what to show; views: how many bird's-eye views stand
     side by side there (A, and B beside it).
@@ -382,6 +389,18 @@ def top_down_view(
     look_at = np.array([(near_m + x_max_m) / 2, centre_y_m, 0.0])
     distance_m = VIEW_DISTANCE_FACTOR * max(x_max_m - near_m, views * (y_max_m - y_min_m))
     back = np.array([-math.cos(VIEW_ELEVATION_RAD), 0.0, math.sin(VIEW_ELEVATION_RAD)])
-    camera.up_direction = UP_DIRECTION
-    camera.position = look_at + distance_m * back
-    camera.look_at = look_at  # after the position: moving the camera moves its look-at too
+    return CameraPose(_tuple3(look_at + distance_m * back), _tuple3(look_at))
+
+
+def pose_of_views(views: Sequence[tuple[BirdEyeGeometry, RgbImage]], params: Params) -> CameraPose:
+    """`top_down_pose` of the bird's-eye views shown side by side (A's first), under A's
+    `params`: centred between the first and the last."""
+    centre_y_m = float(views[-1][0].texture_position_m[1]) / 2
+    return top_down_pose(params, centre_y_m, len(views))
+
+
+def top_down_view(camera: viser.CameraHandle, pose: CameraPose) -> None:
+    """Point a client's camera as `pose` says."""
+    camera.up_direction = pose.up
+    camera.position = pose.position_m
+    camera.look_at = pose.look_at_m  # after the position: moving the camera moves its look-at too

@@ -17,7 +17,13 @@ import viser.transforms as vtf
 from engine_frames import DRIVE, engine_result
 
 from app import bird_eye, overlays, panels
-from app.bird_eye import BirdEyeGeometry, BirdEyeScene, bird_eye_geometry, top_down_view
+from app.bird_eye import (
+    BirdEyeGeometry,
+    BirdEyeScene,
+    bird_eye_geometry,
+    top_down_pose,
+    top_down_view,
+)
 from app.draw import grey_to_rgb
 from core.cli import DEFAULT_RECORDINGS
 from core.engine import FrameResult, FusionEngine
@@ -437,10 +443,16 @@ class FakeCamera:
     up_direction: Any = None
 
 
-def test_top_down_view_looks_down_from_behind_the_ego_car_at_the_road_ahead() -> None:
+def test_the_top_down_pose_looks_down_from_behind_the_ego_car_at_the_road_ahead() -> None:
+    pose = top_down_pose(PARAMS, -11.0)
     camera = FakeCamera()
     top_down: Callable[..., None] = top_down_view
-    top_down(camera, PARAMS, -11.0)
+    top_down(camera, pose)
+    assert (camera.position, camera.look_at, camera.up_direction) == (
+        pose.position_m,
+        pose.look_at_m,
+        pose.up,
+    )
     x_max = panels.bird_eye_extent_m(PARAMS.motion_stereo)[1]
     look_at, position = np.asarray(camera.look_at), np.asarray(camera.position)
     assert bird_eye.EGO_REAR_X_M < look_at[0] < x_max and look_at[1:].tolist() == [-11.0, 0.0]
