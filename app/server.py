@@ -21,6 +21,7 @@ from pathlib import Path
 import viser
 
 from app.catalog import list_recordings, resolve_recording
+from app.clip_export import export_clip
 from app.engines import ClientEngines, FrameCache
 from app.metrics_panel import Evaluate
 from app.page_url import read_page, show_query
@@ -29,7 +30,7 @@ from app.presets import PresetStore
 from app.session import ClientSession
 from app.state import ViewState
 from app.view import CanSeries, FrameSource, FrameView, can_series, render_view
-from app.view_link import ViewLink, link_query, parse_link_query
+from app.view_link import Clip, ViewLink, link_query, parse_link_query
 from app.worker import RenderWorker
 from core.annotation.store import AnnotationStore
 from core.engine import FusionEngine
@@ -169,7 +170,13 @@ class InspectorServer:
         """The full inspector in `client`'s tab, showing `link`."""
         recording = link.recording or self.default_recording
         session = ClientSession(
-            client, self.recordings, recording, self._show_recording, self.presets, self._present
+            client,
+            self.recordings,
+            recording,
+            self._show_recording,
+            self.presets,
+            self._present,
+            self._export,
         )
         with self._lock:
             self._sessions[client.client_id] = session
@@ -197,6 +204,17 @@ class InspectorServer:
             request = functools.partial(entry.worker.submit, client_id)
             session.show_drive(recording, len(entry.drive), entry.drive.frame_rate_hz, request)
         show_query(client, link_query(replace(session.link(), present=True)))
+
+    def _export(
+        self,
+        recording: str,
+        kind: str,
+        clip: Clip,
+        state: ViewState,
+        progress: Callable[[int, int], None],
+    ) -> tuple[str, bytes]:
+        path = resolve_recording(self.recordings_root, recording)
+        return export_clip(path, kind, clip, state, progress)
 
     def _present(self, session: ClientSession) -> None:
         """An inspector tab becomes a presenter of what it shows."""

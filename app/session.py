@@ -9,6 +9,7 @@ on the page in one atomic update. Parameter changes go through the tab's
 from __future__ import annotations
 
 import functools
+import logging
 import threading
 from collections import deque
 from collections.abc import Callable, Sequence
@@ -19,6 +20,7 @@ import viser.uplot
 
 from app.annotate import AnnotationPanel
 from app.bird_eye import BirdEyeViews
+from app.clip_export import EXPORT_KINDS
 from app.history import History
 from app.metrics import SliderMark
 from app.metrics_panel import Evaluate, MetricsPanel
@@ -56,6 +58,9 @@ ANNOTATION_ORDER = 6.5  # the Annotation folder: after Metrics (6), before Keys 
 DEMO_ORDER = 2.5  # the Share and demo folder: under the Timeline (2)
 TIMINGS_WINDOW = 50  # frames in the running median of the stage timings
 NOTICE_SECONDS = 8.0
+# (recording, kind, clip, state, progress) -> (file name, bytes): `app.clip_export.export_clip`
+Exporter = Callable[[str, str, Clip, ViewState, Callable[[int, int], None]], tuple[str, bytes]]
+log = logging.getLogger(__name__)
 
 
 def _run_command(action: Callable[[], object], _: object) -> None:
@@ -83,6 +88,7 @@ class ClientSession:
         on_pick_recording: Callable[[ClientSession, str], None],
         presets: PresetStore,
         on_present: Callable[[ClientSession], None],
+        exporter: Exporter,
     ) -> None:
         self.client = client
         self.recording: str | None = None
@@ -94,6 +100,8 @@ class ClientSession:
         self._player = Player(f"player-{client.client_id}")
         self._on_pick_recording = on_pick_recording
         self._on_present = on_present
+        self._exporter = exporter
+        self._exporting = False  # one export per tab at a time
         self._clip: Clip | None = None  # None: the whole drive
         self._shown_query = ""  # the page URL's query, as last set
         self._can: CanSeries | None = None
@@ -283,9 +291,53 @@ class ClientSession:
             copy = gui.add_button("Copy link", icon=viser.Icon.LINK)
             self._link_text = gui.add_markdown("")
             present = gui.add_button("Present this view", icon=viser.Icon.PRESENTATION)
+            exports = {
+                kind: gui.add_button(label, icon=viser.Icon.DOWNLOAD)
+                for kind, label in EXPORT_KINDS.items()
+            }
+        for kind, button in exports.items():
+            button.on_click(functools.partial(lambda kind, _: self._export(kind), kind))
         self._clip_field.on_update(lambda event: self._clip_typed(event.target.value))
         copy.on_click(lambda _: self._copy_link())
         present.on_click(lambda _: self._on_present(self))
+
+    def _export(self, kind: str) -> None:
+        """Export the clip as `kind` on a thread; the browser downloads the file."""
+        with self._lock:
+            if self._exporting or self.recording is None or self._demo is None:
+                if self._exporting:
+                    self.notify("An export is running", "wait for it to finish", "gray")
+                return
+            self._exporting = True
+            recording, state, folder = self.recording, self._state, self._demo
+        clip = self._clip or (0, self._frame_count - 1)
+        threading.Thread(
+            target=self._run_export,
+            args=(recording, kind, clip, state, folder),
+            name=f"export-{self.client.client_id}",
+            daemon=True,
+        ).start()
+
+    def _run_export(
+        self, recording: str, kind: str, clip: Clip, state: ViewState, folder: viser.GuiFolderHandle
+    ) -> None:
+        with folder:
+            bar = self.client.gui.add_progress_bar(0.0, animated=True)
+
+        def progress(done: int, total: int) -> None:
+            bar.value = 100.0 * done / max(total, 1)  # type: ignore[misc]  # viser: asymmetric property
+
+        try:
+            name, data = self._exporter(recording, kind, clip, state, progress)
+            self.client.send_file_download(name, data, save_immediately=True)
+            self.notify("Exported", f"{name}: {len(data) / 1e6:.1f} MB", "green")
+        except Exception as err:  # the page says so; the log keeps the traceback
+            log.exception("exporting %s of %s failed", kind, recording)
+            self.notify("The export failed", f"{type(err).__name__}: {err}")
+        finally:
+            bar.remove()
+            with self._lock:
+                self._exporting = False
 
     def _clip_typed(self, text: str) -> None:
         try:

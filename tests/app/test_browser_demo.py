@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import contextlib
 import re
+from pathlib import Path
 
+import cv2
 from app_fakes import Recordings
 from browser_page import (
     CAMERA_IMG,
@@ -161,3 +163,27 @@ def test_a_link_with_parts_that_cannot_be_used_says_so_and_shows_the_rest(
         page.get_by_text("frame 5 /").wait_for(timeout=TIMEOUT_MS)
         page.get_by_text("Parts of the link were left out").wait_for(timeout=TIMEOUT_MS)
         page.get_by_text(re.compile("layers: expected layer names")).wait_for(timeout=TIMEOUT_MS)
+
+
+def test_the_clip_is_exported_from_the_page_as_a_video_and_a_3d_scene(
+    recordings: Recordings, page: Page, tmp_path: Path
+) -> None:
+    with serving(page, recordings.root, recordings.name):
+        camera_src(page)
+        open_folders(page, "Share and demo")
+        set_field(page, "clip frames", "2-5")
+        with page.expect_download(timeout=TIMEOUT_MS) as video:
+            page.get_by_role("button", name="Export video (MP4)").click()
+        saved = tmp_path / video.value.suggested_filename
+        video.value.save_as(saved)
+        assert saved.name == f"{recordings.name}-2-5.mp4"
+        capture = cv2.VideoCapture(str(saved))
+        try:
+            assert int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) == 4
+        finally:
+            capture.release()
+        with page.expect_download(timeout=TIMEOUT_MS) as scene:
+            page.get_by_role("button", name="Export 3D scene (HTML)").click()
+        html = Path(scene.value.path()).read_text(encoding="utf-8")
+        assert scene.value.suggested_filename.endswith(".html")
+        assert "window.__VISER_EMBED_DATA__" in html
