@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from app import overlays
-from app.draw import FONT, LINE_THICKNESS_PX, TEXT_COLOUR, Rgb, RgbImage
+from app.draw import FONT, LINE_THICKNESS_PX, TEXT_COLOUR, Rgb, RgbImage, put_tag
 from app.state import Layers
 from core.engine import FrameResult
 
@@ -35,7 +35,7 @@ PRESENTER_LAYERS = Layers(
 
 @dataclass(frozen=True)
 class LegendEntry:
-    mark: str  # "box", "cross" or "tag"
+    mark: str  # "box", "cross" or "tag" (a track's "#7" tag)
     colour: Rgb
     words: str
 
@@ -48,7 +48,7 @@ LEGEND = (
         "cross", overlays.RADAR_GUARD_RAIL_COLOUR, "guard rail: its line and radar targets on it"
     ),
     LegendEntry("box", overlays.PEDESTRIAN_COLOUR, "pedestrian"),
-    LegendEntry("tag", TEXT_COLOUR, "#7: the same object followed over time"),
+    LegendEntry("tag", overlays.VEHICLE_COLOUR, "the same vehicle followed over time"),
 )
 LEGEND_ROW_PX = 26
 LEGEND_MARK_PX = 16
@@ -76,8 +76,8 @@ def legend_picture(
         elif entry.mark == "cross":
             cv2.line(out, (cu - half, cv), (cu + half, cv), entry.colour, LINE_THICKNESS_PX)
             cv2.line(out, (cu, cv - half), (cu, cv + half), entry.colour, LINE_THICKNESS_PX)
-        else:
-            cv2.putText(out, "#", (cu - 5, cv + 6), FONT, LEGEND_FONT_SCALE, entry.colour, 1)
+        else:  # a track's tag, as `app.overlays.draw_track_ids` draws it
+            put_tag(out, "#7", 2, cv + half // 2, entry.colour, font_scale=overlays.TAG_FONT_SCALE)
         org = (row_px + 4, cv + 5)
         cv2.putText(out, entry.words, org, FONT, LEGEND_FONT_SCALE, TEXT_COLOUR, 1, cv2.LINE_AA)
     return out

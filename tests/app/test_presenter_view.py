@@ -1,0 +1,101 @@
+"""The presenter's legend, figures and enlarged picture (app.presenter_view), and the playback
+clock both kinds of tab use (app.player)."""
+
+from __future__ import annotations
+
+import dataclasses
+import threading
+
+import numpy as np
+import pytest
+from engine_frames import engine_result
+
+from app import overlays
+from app.player import Player
+from app.presenter_view import (
+    LEGEND,
+    LEGEND_BACKGROUND,
+    LEGEND_ROW_PX,
+    HeadlineFigures,
+    LegendEntry,
+    enlarged,
+    figures_markdown,
+    headline_figures,
+    legend_picture,
+)
+
+
+def test_each_legend_row_shows_its_colour_left_of_its_words() -> None:
+    picture = legend_picture()
+    assert picture.shape == (LEGEND_ROW_PX * len(LEGEND), 360, 3)
+    for k, entry in enumerate(LEGEND):
+        row = picture[k * LEGEND_ROW_PX : (k + 1) * LEGEND_ROW_PX]
+        mark = (row[:, :LEGEND_ROW_PX] == entry.colour).all(axis=2)
+        assert mark.sum() >= 10, entry.words  # its mark, in its colour
+        words = row[:, LEGEND_ROW_PX:]
+        assert (words != LEGEND_BACKGROUND).any(axis=2).sum() > 20, entry.words
+
+
+def test_the_legend_names_what_a_stakeholder_sees_in_plain_words() -> None:
+    words = {e.words for e in LEGEND}
+    assert "vehicle confirmed by radar and vision" in words and "pedestrian" in words
+    colours = {e.colour for e in LEGEND}
+    assert {overlays.VEHICLE_COLOUR, overlays.RADAR_DISCARDED_COLOUR} <= colours
+    assert overlays.RADAR_GUARD_RAIL_COLOUR in colours and overlays.PEDESTRIAN_COLOUR in colours
+
+
+def test_a_legend_too_small_for_its_marks_is_refused() -> None:
+    with pytest.raises(ValueError, match="width_px, row_px: expected at least"):
+        legend_picture([LegendEntry("box", (1, 2, 3), "x")], width_px=360, row_px=8)
+
+
+def test_the_figures_are_the_frames_vehicles_pedestrians_and_time() -> None:
+    result = engine_result()
+    figures = headline_figures(result)
+    vehicles = result.vehicle.vehicles
+    assert figures.vehicles == len(vehicles) > 0
+    assert figures.nearest_vehicle_m == min(v.distance_m for v in vehicles)
+    assert figures.pedestrians == len(result.pedestrian.kept)
+    assert figures.processing_ms == result.timings.total_ms
+    empty = dataclasses.replace(result, vehicle=dataclasses.replace(result.vehicle, vehicles=()))
+    assert headline_figures(empty).nearest_vehicle_m is None
+
+
+def test_the_figures_read_as_words() -> None:
+    text = figures_markdown(HeadlineFigures(1, 2, 23.4, 4.25))
+    assert "1 vehicle ·" in text and "2 pedestrians" in text
+    assert "nearest vehicle 23 m" in text and "4.2 ms" in text
+    assert "nearest vehicle –" in figures_markdown(HeadlineFigures(0, 0, None, 1.0))
+
+
+def test_an_enlarged_picture_keeps_its_aspect() -> None:
+    rgb = np.zeros((300, 640, 3), np.uint8)
+    rgb[:, 320:] = 200
+    big = enlarged(rgb, 960)
+    assert big.shape == (450, 960, 3) and big.dtype == np.uint8
+    assert big[:, :470].max() == 0 and big[:, 490:].min() == 200
+
+
+def test_the_player_steps_until_a_step_says_no_more_and_stops_on_request() -> None:
+    steps: list[int] = []
+    done = threading.Event()
+
+    def step() -> bool:
+        steps.append(len(steps))
+        if len(steps) == 3:
+            done.set()
+            return False
+        return True
+
+    player = Player("test")
+    assert not player.playing
+    player.start(lambda: 0.001, step)
+    assert done.wait(5.0)
+    player._stop.wait(5.0)
+    assert steps == [0, 1, 2] and not player.playing
+
+    again = threading.Event()
+    player.start(lambda: 0.001, lambda: again.set() or True)
+    assert again.wait(5.0) and player.playing
+    player.stop()
+    assert not player.playing
