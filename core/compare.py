@@ -74,7 +74,8 @@ class DetectionDiff:
 
 
 def _metres(x: float, spec: str) -> str:
-    return format(x, spec) if math.isfinite(x) else "?"
+    """`x` formatted by `spec` (e.g. "+.1f"), never as "-0.0"; "?" when not finite."""
+    return format(x, spec.replace(".", "z.", 1)) if math.isfinite(x) else "?"
 
 
 def _area_box(area: SearchArea) -> Box:

@@ -134,6 +134,11 @@ def test_an_unknown_width_reads_as_a_question_mark(real: FrameResult) -> None:
     assert vehicle.label == "vehicle at 8.0 m, lateral ? m, ? m wide"
 
 
+def test_a_lateral_just_right_of_the_axis_reads_as_zero_not_minus_zero(real: FrameResult) -> None:
+    (vehicle,) = detections(made(real, (car((0.0, 0.0, 10.0, 10.0), 8.0, -0.04, 1.8),)))
+    assert vehicle.label == "vehicle at 8.0 m, lateral +0.0 m, 1.8 m wide"
+
+
 def test_a_real_frame_has_its_results_detections_and_nothing_differs_from_itself(
     real: FrameResult,
 ) -> None:
