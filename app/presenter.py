@@ -18,8 +18,9 @@ from dataclasses import replace
 import viser
 
 from app.bird_eye import BirdEyeViews
+from app.legend import legend_strip
 from app.player import Player
-from app.presenter_view import PRESENTER_LAYERS, enlarged, figures_markdown, legend_picture
+from app.presenter_view import PRESENTER_LAYERS, enlarged, figures_markdown
 from app.session import escape_markdown
 from app.state import Panels, ViewState
 from app.view import FrameView
@@ -27,6 +28,7 @@ from app.view_link import Clip, ViewLink
 
 PRESENTER_CAMERA_WIDTH_PX = 900
 PICTURE_WIDTH_PX = PRESENTER_CAMERA_WIDTH_PX - 40  # the panel's margins and scroll bar
+LEGEND_WIDTH_PX = 320  # the left panel's
 PRESENTER_PANELS = Panels(bird_eye=True, can=False, stage="none")
 
 
@@ -66,7 +68,7 @@ class PresenterSession:
             back = gui.add_button("Back to the inspector", icon=viser.Icon.ADJUSTMENTS, order=3)
             back.on_click(lambda _: on_leave(self))
         gui.add_markdown("**What the colours mean**", order=4)
-        gui.add_image(legend_picture(), format="png", order=5)
+        gui.add_image(legend_strip(self._state.layers, LEGEND_WIDTH_PX), format="png", order=5)
         gui.main_panel.dock_left()
         self._camera_panel = gui.add_panel()
         self._camera_tab = self._camera_panel.add_tab("Camera")

@@ -1,19 +1,18 @@
 """What the presenter view shows beside the pictures, for people who never read the papers:
-a legend of the overlay colours in plain words, and a few large figures of the frame.
+a few large figures of the frame, the picture enlarged to fill its panel, and the layers it
+draws (the legend of their colours is `app.legend`'s).
 
-Pure functions of an engine result; the colours are the overlays' own (`app.overlays`).
+Pure functions of an engine result.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
-from app import overlays
-from app.draw import FONT, LINE_THICKNESS_PX, TEXT_COLOUR, Rgb, RgbImage, put_tag
+from app.draw import RgbImage
 from app.state import Layers
 from core.engine import FrameResult
 
@@ -31,56 +30,6 @@ PRESENTER_LAYERS = Layers(
     tracks=True,
     truth=False,
 )
-
-
-@dataclass(frozen=True)
-class LegendEntry:
-    mark: str  # "box", "cross" or "tag" (a track's "#7" tag)
-    colour: Rgb
-    words: str
-
-
-LEGEND = (
-    LegendEntry("box", overlays.VEHICLE_COLOUR, "vehicle confirmed by radar and vision"),
-    LegendEntry("cross", overlays.RADAR_REFINED_COLOUR, "radar target that found the vehicle"),
-    LegendEntry("cross", overlays.RADAR_DISCARDED_COLOUR, "radar target discarded (no vehicle)"),
-    LegendEntry(
-        "cross", overlays.RADAR_GUARD_RAIL_COLOUR, "guard rail: its line and radar targets on it"
-    ),
-    LegendEntry("box", overlays.PEDESTRIAN_COLOUR, "pedestrian"),
-    LegendEntry("tag", overlays.VEHICLE_COLOUR, "the same vehicle followed over time"),
-)
-LEGEND_ROW_PX = 26
-LEGEND_MARK_PX = 16
-LEGEND_FONT_SCALE = 0.5
-LEGEND_BACKGROUND: Rgb = (24, 24, 24)
-
-
-def legend_picture(
-    entries: Sequence[LegendEntry] = LEGEND, width_px: int = 360, row_px: int = LEGEND_ROW_PX
-) -> RgbImage:
-    """One row per entry on a dark background: its mark drawn as the overlays draw it, then
-    its words. ValueError when `width_px` or `row_px` is too small to hold a mark."""
-    if row_px < LEGEND_MARK_PX + 4 or width_px < 2 * row_px:
-        raise ValueError(
-            f"width_px, row_px: expected at least {2 * (LEGEND_MARK_PX + 4)} and "
-            f"{LEGEND_MARK_PX + 4} px, got {width_px} and {row_px}"
-        )
-    out = np.full((row_px * len(entries), width_px, 3), LEGEND_BACKGROUND, dtype=np.uint8)
-    half = LEGEND_MARK_PX // 2
-    for i, entry in enumerate(entries):
-        cu, cv = row_px // 2, i * row_px + row_px // 2
-        if entry.mark == "box":
-            corner0, corner1 = (cu - half, cv - half), (cu + half, cv + half)
-            cv2.rectangle(out, corner0, corner1, entry.colour, LINE_THICKNESS_PX)
-        elif entry.mark == "cross":
-            cv2.line(out, (cu - half, cv), (cu + half, cv), entry.colour, LINE_THICKNESS_PX)
-            cv2.line(out, (cu, cv - half), (cu, cv + half), entry.colour, LINE_THICKNESS_PX)
-        else:  # a track's tag, as `app.overlays.draw_track_ids` draws it
-            put_tag(out, "#7", 2, cv + half // 2, entry.colour, font_scale=overlays.TAG_FONT_SCALE)
-        org = (row_px + 4, cv + 5)
-        cv2.putText(out, entry.words, org, FONT, LEGEND_FONT_SCALE, TEXT_COLOUR, 1, cv2.LINE_AA)
-    return out
 
 
 def enlarged(rgb: RgbImage, width_px: int) -> RgbImage:

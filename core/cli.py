@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from core.annotation.model import Track
     from core.importer import CalibrationSpec, CanSpec, ImportOptions, ImportResult, IntrinsicsSpec
+    from core.io.drive import Drive
+    from core.params import Params
 
 DEFAULT_RECORDINGS = Path(__file__).resolve().parents[1] / "recordings"
 DEFAULT_RECORDING = "highway"
@@ -27,12 +29,14 @@ class ProgressBar:
         self.label = label
         self.width = width
         self._drawn = -1
+        self.line_open = False  # drawn and not yet ended by its last step
 
     def __call__(self, done: int, total: int) -> None:
         filled = self.width * done // max(total, 1)
         if filled == self._drawn and done < total:
             return  # redrawn when the bar grows: a log of it stays short
         self._drawn = filled
+        self.line_open = done < total
         bar = "#" * filled + "." * (self.width - filled)
         end = "\n" if done >= total else ""
         sys.stderr.write(f"\r{self.label} [{bar}] {done}/{total}{end}")
@@ -593,6 +597,223 @@ def _cmd_synth(args: argparse.Namespace) -> int:
     return 0
 
 
+# --- export-video, export-scene: a clip of a drive, exported (app.video_export, app.snapshot)
+
+SCENE_SUFFIX = ".html"
+# (drive, its clip's frames, set A, set B or None, progress) -> the summary line printed
+ClipWriter = Callable[["Drive", range, "Params", "Params | None", ProgressBar], str]
+
+
+def _clip_frames(args: argparse.Namespace, times_ns: Sequence[int], where: Path) -> range:
+    """The frames of a drive (camera stamps `times_ns`, read from `where`) from --from to
+    --to, seconds from its first frame, both included (default: the whole drive)."""
+    offsets_ns = [int(t) - int(times_ns[0]) for t in times_ns]
+    end_s = offsets_ns[-1] / 1e9
+    from_s = 0.0 if args.from_s is None else args.from_s
+    to_s = end_s if args.to_s is None else args.to_s
+    for flag, value in (("--from", from_s), ("--to", to_s)):
+        if _s_to_ns(value) > offsets_ns[-1]:
+            raise _UsageError(
+                f"{flag} {value:g}: expected seconds from the first frame of {where}, from 0 "
+                f"to {end_s:g} (its last frame)"
+            )
+    if from_s > to_s:
+        raise _UsageError(f"--from {from_s:g}, --to {to_s:g}: expected --from before --to")
+    frames = [i for i, t in enumerate(offsets_ns) if _s_to_ns(from_s) <= t <= _s_to_ns(to_s)]
+    if not frames:
+        raise _UsageError(
+            f"--from {from_s:g}, --to {to_s:g}: no frame of {where} between them; widen the clip"
+        )
+    return range(frames[0], frames[-1] + 1)
+
+
+def _export_clip(
+    args: argparse.Namespace, verb: str, write: ClipWriter, errors: tuple[type[Exception], ...] = ()
+) -> int:
+    """Export the clip --from/--to of RECORDING under --params (and --ab) with `write`, a
+    progress bar on stderr; what fails is said as `fusionscope {verb}: ...` (exit 2), Ctrl-C
+    exits 130."""
+    from core.io.drive import Drive
+    from core.io.errors import RecordingError
+    from core.params import Params, load_params
+
+    command = f"fusionscope {verb}"
+    failures: tuple[type[Exception], ...] = (_UsageError, ValueError, RecordingError, OSError)
+    failures += errors
+    bar = ProgressBar(f"{verb} {Path(args.recording).name}")
+    try:
+        sets = []
+        for flag, path in (("--params", args.params), ("--ab", args.ab)):
+            try:
+                sets.append(load_params(path) if path else None)
+            except ValueError as err:
+                raise _UsageError(f"{flag}: {err}") from err
+        with Drive(args.recording) as drive:
+            clip = _clip_frames(args, drive.times_ns.tolist(), drive.path)
+            summary = write(drive, clip, sets[0] or Params(), sets[1], bar)
+    except failures as err:
+        print(("\n" if bar.line_open else "") + f"{command}: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(
+            ("\n" if bar.line_open else "") + f"{command}: interrupted; nothing written to "
+            f"{args.out}",
+            file=sys.stderr,
+        )
+        return 130
+    print(summary)
+    return 0
+
+
+def _cmd_export_scene(args: argparse.Namespace) -> int:
+    import contextlib
+    import io
+
+    from app.snapshot import bird_eye_snapshot_html
+
+    out: Path = args.out
+
+    def write(
+        drive: Drive, clip: range, params: Params, params_b: Params | None, bar: ProgressBar
+    ) -> str:
+        if out.suffix.lower() != SCENE_SUFFIX:
+            raise _UsageError(
+                f"OUT {out}: expected a file name ending in {SCENE_SUFFIX}, "
+                f"got {out.suffix or 'no suffix'}"
+            )
+        if out.is_dir():
+            raise _UsageError(f"OUT {out}: expected a file to write, got a folder")
+        if not out.parent.is_dir():
+            raise _UsageError(f"OUT {out}: the folder {out.parent} does not exist")
+        # viser prints a banner for its private recording server; it is nobody's business
+        with contextlib.redirect_stdout(io.StringIO()):
+            html = bird_eye_snapshot_html(drive, clip[0], clip[-1], params, params_b, bar)
+        partial = out.with_name(out.name + ".partial")
+        try:
+            partial.write_text(html, encoding="utf-8", newline="")
+            partial.replace(out)  # a complete page or none
+        finally:
+            partial.unlink(missing_ok=True)
+        start_ns = int(drive.times_ns[0])
+        first_s, last_s = ((int(drive.times_ns[k]) - start_ns) / 1e9 for k in (clip[0], clip[-1]))
+        return (
+            f"{out}: {len(clip)} frames, {first_s:.2f} to {last_s:.2f} s of {args.recording}"
+            + (" (A and B beside it)" if params_b is not None else "")
+            + f", {out.stat().st_size / 1e6:.1f} MB"
+        )
+
+    return _export_clip(args, "export-scene", write)
+
+
+def _cmd_export_video(args: argparse.Namespace) -> int:
+    from app.video_export import ExportError, export_video, layers_named, summary_text, video_format
+    from core.bench import one_thread
+
+    def write(
+        drive: Drive, clip: range, params: Params, params_b: Params | None, bar: ProgressBar
+    ) -> str:
+        fmt = video_format(args.out, "OUT")
+        if args.gif_width is not None and fmt != "gif":
+            raise _UsageError(f"--gif-width: only for a .gif OUT, got {args.out}")
+        try:
+            layers = None if args.layers is None else layers_named(args.layers)
+        except ValueError as err:
+            raise _UsageError(f"--layers {args.layers}: {err}") from err
+        with one_thread():  # and the encoder on one: the speed printed is one core's
+            summary = export_video(
+                drive, args.out, clip[0], clip[-1], layers, params, params_b, bar, args.gif_width
+            )
+        return summary_text(summary)
+
+    return _export_clip(args, "export-video", write, (ExportError,))
+
+
+def _clip_args(p: argparse.ArgumentParser) -> None:
+    """RECORDING, OUT and the clip's and parameter sets' options of an export."""
+    p.add_argument("recording", type=Path, metavar="RECORDING", help="a recording folder")
+    p.add_argument(
+        "--from",
+        dest="from_s",
+        metavar="T",
+        type=_non_negative,
+        help="start of the clip, seconds from the drive's first frame (default: 0)",
+    )
+    p.add_argument(
+        "--to",
+        dest="to_s",
+        metavar="T",
+        type=_non_negative,
+        help="end of the clip, seconds from the drive's first frame, included (default: the "
+        "last frame)",
+    )
+    p.add_argument(
+        "--params", type=Path, metavar="FILE", help="parameter file (default: the papers')"
+    )
+    p.add_argument(
+        "--ab",
+        type=Path,
+        metavar="FILE",
+        help="parameter file of a set B drawn beside the first (A/B compare)",
+    )
+
+
+def _add_export_scene(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    scene = sub.add_parser(
+        "export-scene",
+        help="save a clip's 3D bird's-eye scene as one HTML page that plays without a server",
+        description=_paragraph(
+            "Run the fusion engine over the clip (as the inspector plays it: the frames "
+            "before --from are replayed first) and record its 3D bird's-eye view (the road "
+            "texture, radar targets, vehicles, tracks, the ego car) frame after frame, at the "
+            "drive's own pace, in one self-contained HTML page: open it in a browser, no "
+            "server and no network needed; it loops over the clip. With --ab, a second "
+            "parameter set's view beside it, as the inspector compares them. The page is "
+            "about 0.8 MB plus 13 KB a frame (a bundled 15 s drive: 2.8 MB)."
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _clip_args(scene)
+    scene.add_argument(
+        "out", type=Path, metavar="OUT.html", help="the page to write (replaced whole)"
+    )
+    scene.set_defaults(func=_cmd_export_scene)
+
+
+def _add_export_video(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    video = sub.add_parser(
+        "export-video",
+        help="render a clip with its overlays to an .mp4 video or an animated .gif",
+        description=_paragraph(
+            "Run the fusion engine over the clip (as the inspector shows it: the frames "
+            "before --from are replayed first) and write every frame's camera picture with "
+            "the overlay layers chosen, over a banner: the recording, the time from the "
+            "drive's first frame, the frame's index, the parameter set's hash, and what the "
+            "colours mean. .mp4: H.264 at the drive's frame rate, plays in browsers while it "
+            "loads; .gif: an animated GIF for slides, scaled down. With --ab, a second "
+            "parameter set's picture beside the first, as the inspector compares them. OUT "
+            "is written whole at the end (OUT.partial until then)."
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _clip_args(video)
+    video.add_argument(
+        "out", type=Path, metavar="OUT", help="the .mp4 or .gif to write (replaced whole)"
+    )
+    video.add_argument(
+        "--layers",
+        metavar="NAMES",
+        help="comma-separated overlays to draw, the others off, e.g. radar,vehicles,guardrails "
+        "(a name not known lists them all; default: the inspector's)",
+    )
+    video.add_argument(
+        "--gif-width",
+        type=_int_at_least(16),
+        metavar="PX",
+        help="width of a .gif (default: 480 px per camera picture)",
+    )
+    video.set_defaults(func=_cmd_export_video)
+
+
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 # where the inspector keeps parameter presets: the user's data folder, not the project
 DEFAULT_PRESETS = (
@@ -621,7 +842,7 @@ def _cmd_serve(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     try:
-        serve(root, args.recording, args.host, args.port, Path(args.presets))
+        serve(root, args.recording, args.host, args.port, Path(args.presets), args.present)
     except ValueError as err:
         print(f"fusionscope serve: {err}", file=sys.stderr)
         return 2
@@ -769,6 +990,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--presets",
         default=str(DEFAULT_PRESETS),
         help=f"folder the inspector saves parameter presets in (default: {DEFAULT_PRESETS})",
+    )
+    serve.add_argument(
+        "--present",
+        action="store_true",
+        help="every tab shows the presenter view (a demo: pictures, legend, figures, no "
+        "controls) and cannot leave it",
     )
     serve.set_defaults(func=_cmd_serve)
 
@@ -1118,6 +1345,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     synth.add_argument("out_dir", help="new or empty folder to write the recording into")
     synth.set_defaults(func=_cmd_synth)
+
+    _add_export_scene(sub)
+    _add_export_video(sub)
     return parser
 
 

@@ -375,9 +375,10 @@ def test_what_was_found_and_what_was_rejected_are_separate_layers() -> None:
     rejected = overlays.draw_layers(rgb, result, ["rejected"])
     for colour in (overlays.VEHICLE_REJECTED_COLOUR, overlays.PEDESTRIAN_REJECTED_COLOUR):
         assert not is_colour(found, colour).any()
-    assert is_colour(rejected, overlays.VEHICLE_REJECTED_COLOUR).any() or is_colour(
-        rejected, overlays.PEDESTRIAN_REJECTED_COLOUR
-    ).any()
+    assert (
+        is_colour(rejected, overlays.VEHICLE_REJECTED_COLOUR).any()
+        or is_colour(rejected, overlays.PEDESTRIAN_REJECTED_COLOUR).any()
+    )
     for colour in (overlays.VEHICLE_COLOUR, overlays.PEDESTRIAN_COLOUR):
         assert not is_colour(rejected, colour).any()
 

@@ -1,4 +1,4 @@
-"""The presenter's legend, figures and enlarged picture (app.presenter_view), and the playback
+"""The presenter's layers, figures and enlarged picture (app.presenter_view), and the playback
 clock both kinds of tab use (app.player)."""
 
 from __future__ import annotations
@@ -7,46 +7,24 @@ import dataclasses
 import threading
 
 import numpy as np
-import pytest
 from engine_frames import engine_result
 
-from app import overlays
+from app.legend import legend_items
 from app.player import Player
 from app.presenter_view import (
-    LEGEND,
-    LEGEND_BACKGROUND,
-    LEGEND_ROW_PX,
+    PRESENTER_LAYERS,
     HeadlineFigures,
-    LegendEntry,
     enlarged,
     figures_markdown,
     headline_figures,
-    legend_picture,
 )
 
 
-def test_each_legend_row_shows_its_colour_left_of_its_words() -> None:
-    picture = legend_picture()
-    assert picture.shape == (LEGEND_ROW_PX * len(LEGEND), 360, 3)
-    for k, entry in enumerate(LEGEND):
-        row = picture[k * LEGEND_ROW_PX : (k + 1) * LEGEND_ROW_PX]
-        mark = (row[:, :LEGEND_ROW_PX] == entry.colour).all(axis=2)
-        assert mark.sum() >= 10, entry.words  # its mark, in its colour
-        words = row[:, LEGEND_ROW_PX:]
-        assert (words != LEGEND_BACKGROUND).any(axis=2).sum() > 20, entry.words
-
-
-def test_the_legend_names_what_a_stakeholder_sees_in_plain_words() -> None:
-    words = {e.words for e in LEGEND}
+def test_the_presenter_draws_what_was_found_and_its_legend_says_it_in_plain_words() -> None:
+    words = {item.words for item in legend_items(PRESENTER_LAYERS)}
     assert "vehicle confirmed by radar and vision" in words and "pedestrian" in words
-    colours = {e.colour for e in LEGEND}
-    assert {overlays.VEHICLE_COLOUR, overlays.RADAR_DISCARDED_COLOUR} <= colours
-    assert overlays.RADAR_GUARD_RAIL_COLOUR in colours and overlays.PEDESTRIAN_COLOUR in colours
-
-
-def test_a_legend_too_small_for_its_marks_is_refused() -> None:
-    with pytest.raises(ValueError, match="width_px, row_px: expected at least"):
-        legend_picture([LegendEntry("box", (1, 2, 3), "x")], width_px=360, row_px=8)
+    assert "radar target discarded (no vehicle)" in words and "guard rail" in words
+    assert not PRESENTER_LAYERS.rejected and not PRESENTER_LAYERS.horizon
 
 
 def test_the_figures_are_the_frames_vehicles_pedestrians_and_time() -> None:
