@@ -20,9 +20,9 @@ import viser
 from app.bird_eye import BirdEyeViews
 from app.legend import legend_strip
 from app.player import Player
-from app.presenter_view import PRESENTER_LAYERS, enlarged, figures_markdown
+from app.presenter_view import enlarged, figures_markdown
 from app.session import escape_markdown
-from app.state import Panels, ViewState
+from app.state import DEMO_LAYERS, Panels, ViewState
 from app.view import FrameView
 from app.view_link import Clip, ViewLink
 
@@ -48,7 +48,7 @@ class PresenterSession:
         self._lock = threading.RLock()
         self._state = ViewState(
             frame=link.frame or 0,
-            layers=link.layers or PRESENTER_LAYERS,
+            layers=link.layers or DEMO_LAYERS,
             params=link.params,
             params_b=link.params_b,
             panels=PRESENTER_PANELS,

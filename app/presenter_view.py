@@ -1,6 +1,6 @@
 """What the presenter view shows beside the pictures, for people who never read the papers:
-a few large figures of the frame, the picture enlarged to fill its panel, and the layers it
-draws (the legend of their colours is `app.legend`'s).
+a few large figures of the frame and the picture enlarged to fill its panel (the legend of
+the colours is `app.legend`'s, the layers drawn `app.state.DEMO_LAYERS`).
 
 Pure functions of an engine result.
 """
@@ -13,23 +13,7 @@ import cv2
 import numpy as np
 
 from app.draw import RgbImage
-from app.state import Layers
 from core.engine import FrameResult
-
-# the layers a presenter shows: what was found, not how
-PRESENTER_LAYERS = Layers(
-    radar=True,
-    areas=False,
-    vehicles=True,
-    guardrails=True,
-    pedestrians=True,
-    rejected=False,
-    pruned=False,
-    strip=False,
-    horizon=False,
-    tracks=True,
-    truth=False,
-)
 
 
 def enlarged(rgb: RgbImage, width_px: int) -> RgbImage:

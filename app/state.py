@@ -34,6 +34,22 @@ class Layers:
         return tuple(f.name for f in fields(Layers))
 
 
+# what a demo draws (the presenter, an exported video): what was found, not how
+DEMO_LAYERS = Layers(
+    radar=True,
+    areas=False,
+    vehicles=True,
+    guardrails=True,
+    pedestrians=True,
+    rejected=False,
+    pruned=False,
+    strip=False,
+    horizon=False,
+    tracks=True,
+    truth=False,
+)
+
+
 # the stage pictures under the camera, one at a time ("timings" is a table, "none" nothing)
 STAGES = ("motion_stereo", "symmetry", "pedestrians", "guard_rails", "timings", "none")
 

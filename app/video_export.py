@@ -48,7 +48,7 @@ from PIL import Image
 
 from app import draw
 from app.engines import FrameCache
-from app.state import Layers
+from app.state import DEMO_LAYERS, Layers
 from app.video_frame import video_frame
 from app.view import AB_GAP_PX, FrameSource
 from core.engine import FusionEngine
@@ -292,9 +292,9 @@ def export_video(
     gif_width_px: int | None = None,
 ) -> ExportSummary:
     """Frames first_frame..last_frame (both included) of `drive` as a video in `out_path`
-    (module docstring): `layers` (default `Layers()`) of the engine's results under
-    `params` (default `Params()`), set `params_b`'s beside them when given, each over its
-    banner (`app.video_frame.video_frame`).
+    (module docstring): `layers` (default `app.state.DEMO_LAYERS`, what was found) of the
+    engine's results under `params` (default `Params()`), set `params_b`'s beside them when
+    given, each over its banner (`app.video_frame.video_frame`).
 
     progress(done, total) after each frame written. gif_width_px: a GIF's width (default
     `GIF_PICTURE_WIDTH_PX` per camera picture); only for .gif. ValueError naming the
@@ -315,7 +315,7 @@ def export_video(
             raise ValueError(
                 f"gif_width_px: expected at least {MIN_GIF_WIDTH_PX} px, got {gif_width_px}"
             )
-    layers = Layers() if layers is None else layers
+    layers = DEMO_LAYERS if layers is None else layers
     sets = [Params() if params is None else params] + ([] if params_b is None else [params_b])
     hashes = [params_hash(p) for p in sets]
     frames = FrameCache(drive)

@@ -803,7 +803,8 @@ def _add_export_video(sub: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "--layers",
         metavar="NAMES",
         help="comma-separated overlays to draw, the others off, e.g. radar,vehicles,guardrails "
-        "(a name not known lists them all; default: the inspector's)",
+        "(a name not known lists them all; default: what was found: radar, vehicles, "
+        "guardrails, pedestrians, tracks)",
     )
     video.add_argument(
         "--gif-width",

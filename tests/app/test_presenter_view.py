@@ -12,19 +12,19 @@ from engine_frames import engine_result
 from app.legend import legend_items
 from app.player import Player
 from app.presenter_view import (
-    PRESENTER_LAYERS,
     HeadlineFigures,
     enlarged,
     figures_markdown,
     headline_figures,
 )
+from app.state import DEMO_LAYERS
 
 
 def test_the_presenter_draws_what_was_found_and_its_legend_says_it_in_plain_words() -> None:
-    words = {item.words for item in legend_items(PRESENTER_LAYERS)}
+    words = {item.words for item in legend_items(DEMO_LAYERS)}
     assert "vehicle confirmed by radar and vision" in words and "pedestrian" in words
     assert "radar target discarded (no vehicle)" in words and "guard rail" in words
-    assert not PRESENTER_LAYERS.rejected and not PRESENTER_LAYERS.horizon
+    assert not DEMO_LAYERS.rejected and not DEMO_LAYERS.horizon
 
 
 def test_the_figures_are_the_frames_vehicles_pedestrians_and_time() -> None:

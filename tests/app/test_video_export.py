@@ -16,7 +16,7 @@ from engine_frames import FRAME, engine_result
 from PIL import Image, ImageSequence
 
 from app import overlays
-from app.state import Layers
+from app.state import DEMO_LAYERS, Layers
 from app.video_export import (
     GIF_PICTURE_WIDTH_PX,
     ExportSummary,
@@ -140,7 +140,7 @@ def test_first_frame_is_what_the_inspector_shows_for_it(mp4: ExportSummary, driv
     frames, _ = _decode(mp4.path)
     composed = video_frame(
         drive,
-        Layers(),
+        DEMO_LAYERS,
         drive.frame(FRAME),
         [engine_result("highway", FRAME)],
         [params_hash(Params())],
@@ -148,7 +148,7 @@ def test_first_frame_is_what_the_inspector_shows_for_it(mp4: ExportSummary, driv
     assert _worst_luma_block(frames[0], composed) <= LUMA_BLOCK_TOLERANCE
     other = video_frame(
         drive,
-        Layers(),
+        DEMO_LAYERS,
         drive.frame(FRAME + 1),
         [engine_result("highway", FRAME + 1)],
         [params_hash(Params())],
