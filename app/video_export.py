@@ -51,13 +51,17 @@ from app.engines import FrameCache
 from app.state import DEMO_LAYERS, Layers
 from app.video_frame import video_frame
 from app.view import AB_GAP_PX, FrameSource
+from core.checks import output_suffix
 from core.engine import FusionEngine
 from core.params import Params, params_hash
 
 VIDEO_FORMATS = {".mp4": "mp4", ".gif": "gif"}  # OUT's suffix (any case) -> container
 PARTIAL_SUFFIX = ".partial"
 ENCODER_THREADS = 1
-X264_OPTIONS = {"preset": "ultrafast", "crf": "20"}
+CODEC_OPTIONS: dict[str, dict[str, str]] = {
+    "libx264": {"preset": "ultrafast", "crf": "20"},
+    "gif": {},
+}
 MP4_OPTIONS = {"movflags": "+faststart"}
 AVCOL_SPC_SMPTE170M = 6  # FFmpeg's AVColorSpace for BT.601 (PyAV's Colorspace is swscale's)
 GIF_PICTURE_WIDTH_PX = 480  # a GIF's width per camera picture, by default
@@ -122,16 +126,7 @@ def summary_text(summary: ExportSummary) -> str:
 def video_format(out_path: Path, name: str = "out_path") -> str:
     """The container of `out_path` by its suffix ("mp4" or "gif"). ValueError naming `name`
     when the suffix is another, `out_path` is a folder, or its folder does not exist."""
-    fmt = VIDEO_FORMATS.get(out_path.suffix.lower())
-    if fmt is None:
-        raise ValueError(
-            f"{name} {out_path}: expected a file name ending in "
-            f"{' or '.join(VIDEO_FORMATS)}, got {out_path.suffix or 'no suffix'}"
-        )
-    if out_path.is_dir():
-        raise ValueError(f"{name} {out_path}: expected a file to write, got a folder")
-    if not out_path.parent.is_dir():
-        raise ValueError(f"{name} {out_path}: the folder {out_path.parent} does not exist")
+    fmt = VIDEO_FORMATS[output_suffix(name, out_path, VIDEO_FORMATS)]
     return fmt
 
 
@@ -158,32 +153,31 @@ class _Writer(Protocol):
     def close(self) -> None: ...
 
 
-class _Mp4Writer:
-    """H.264 in MP4 through PyAV; frames converted to yuv420p by OpenCV (BT.601, limited
-    range; swscale's conversion costs 30 times as much here)."""
+class _AvWriter:
+    """Frames into a container through one PyAV stream, numbered from 0; `close` flushes the
+    encoder and closes the file."""
 
-    def __init__(self, path: Path, size_px: tuple[int, int], rate: Fraction) -> None:
-        self._container = av.open(str(path), mode="w", format="mp4", options=MP4_OPTIONS)
+    def __init__(
+        self, path: Path, fmt: str, codec: str, size_px: tuple[int, int], rate: Fraction
+    ) -> None:
+        options = MP4_OPTIONS if fmt == "mp4" else {}
+        self._container = av.open(str(path), mode="w", format=fmt, options=options)
         try:
-            stream = self._container.add_stream("libx264", rate=rate, options=X264_OPTIONS)
+            added = self._container.add_stream(codec, rate=rate, options=CODEC_OPTIONS[codec])
+            stream = cast(av.VideoStream, added)  # a video codec's stream
             stream.width, stream.height = size_px
-            stream.pix_fmt = "yuv420p"
-            context = stream.codec_context
-            context.thread_count = ENCODER_THREADS
-            context.color_range = ColorRange.MPEG
-            context.colorspace = AVCOL_SPC_SMPTE170M
-            context.color_primaries = ColorPrimaries.SMPTE170M
-            context.color_trc = ColorTrc.SMPTE170M
+            stream.codec_context.thread_count = ENCODER_THREADS
+            self._configure(stream)
         except BaseException:
             self._container.close()
             raise
         self._stream = stream
         self._count = 0
 
-    def write(self, rgb: draw.RgbImage) -> None:
-        frame = av.VideoFrame.from_ndarray(
-            np.asarray(cv2.cvtColor(rgb, cv2.COLOR_RGB2YUV_I420), dtype=np.uint8), format="yuv420p"
-        )
+    def _configure(self, stream: av.VideoStream) -> None:
+        """The stream's pixel format and whatever else the format needs."""
+
+    def _mux(self, frame: av.VideoFrame) -> None:
         frame.pts = self._count
         self._count += 1
         self._container.mux(self._stream.encode(frame))
@@ -195,22 +189,35 @@ class _Mp4Writer:
             self._container.close()
 
 
-class _GifWriter:
-    """An animated GIF through PyAV's (FFmpeg's) GIF encoder, one palette per frame by
-    Pillow's quantizer; loops for ever."""
+class _Mp4Writer(_AvWriter):
+    """H.264 in MP4; frames converted to yuv420p by OpenCV (BT.601, limited range;
+    swscale's conversion costs 30 times as much here)."""
 
     def __init__(self, path: Path, size_px: tuple[int, int], rate: Fraction) -> None:
-        self._container = av.open(str(path), mode="w", format="gif")
-        try:
-            stream = self._container.add_stream("gif", rate=rate)
-            stream.width, stream.height = size_px
-            stream.pix_fmt = "pal8"
-            stream.codec_context.thread_count = ENCODER_THREADS
-        except BaseException:
-            self._container.close()
-            raise
-        self._stream = stream
-        self._count = 0
+        super().__init__(path, "mp4", "libx264", size_px, rate)
+
+    def _configure(self, stream: av.VideoStream) -> None:
+        stream.pix_fmt = "yuv420p"
+        context = stream.codec_context
+        context.color_range = ColorRange.MPEG
+        context.colorspace = AVCOL_SPC_SMPTE170M
+        context.color_primaries = ColorPrimaries.SMPTE170M
+        context.color_trc = ColorTrc.SMPTE170M
+
+    def write(self, rgb: draw.RgbImage) -> None:
+        yuv = np.asarray(cv2.cvtColor(rgb, cv2.COLOR_RGB2YUV_I420), dtype=np.uint8)
+        self._mux(av.VideoFrame.from_ndarray(yuv, format="yuv420p"))
+
+
+class _GifWriter(_AvWriter):
+    """An animated GIF through FFmpeg's GIF encoder, one palette per frame by Pillow's
+    quantizer; loops for ever."""
+
+    def __init__(self, path: Path, size_px: tuple[int, int], rate: Fraction) -> None:
+        super().__init__(path, "gif", "gif", size_px, rate)
+
+    def _configure(self, stream: av.VideoStream) -> None:
+        stream.pix_fmt = "pal8"
 
     def write(self, rgb: draw.RgbImage) -> None:
         quantized = Image.fromarray(rgb).quantize(
@@ -221,16 +228,7 @@ class _GifWriter:
         argb[:, 0] = OPAQUE
         argb[: len(rgb_palette), 1:] = rgb_palette[:GIF_COLOURS]
         pal8 = cast(Any, (np.asarray(quantized, dtype=np.uint8), argb))
-        frame = av.VideoFrame.from_ndarray(pal8, format="pal8")
-        frame.pts = self._count
-        self._count += 1
-        self._container.mux(self._stream.encode(frame))
-
-    def close(self) -> None:
-        try:
-            self._container.mux(self._stream.encode(None))
-        finally:
-            self._container.close()
+        self._mux(av.VideoFrame.from_ndarray(pal8, format="pal8"))
 
 
 def _discard(writer: _Writer | None, partial: Path) -> None:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Collection
+from pathlib import Path
 
 import numpy as np
 
@@ -25,3 +27,19 @@ def require_2d_array(name: str, array: object, dtype: type[np.generic], what: st
         raise ValueError(f"{name}: expected an (H, W) {what}, got {type(array).__name__}")
     if array.dtype != dtype or array.ndim != 2:
         raise ValueError(f"{name}: expected an (H, W) {what}, got {array.dtype} {array.shape}")
+
+
+def output_suffix(name: str, path: Path, suffixes: Collection[str]) -> str:
+    """The suffix of `path` (lower case), a file to be written; ValueError naming `name` when
+    the suffix is not one of `suffixes`, `path` is a folder, or its folder does not exist."""
+    suffix = path.suffix.lower()
+    if suffix not in suffixes:
+        raise ValueError(
+            f"{name} {path}: expected a file name ending in {' or '.join(suffixes)}, "
+            f"got {path.suffix or 'no suffix'}"
+        )
+    if path.is_dir():
+        raise ValueError(f"{name} {path}: expected a file to write, got a folder")
+    if not path.parent.is_dir():
+        raise ValueError(f"{name} {path}: the folder {path.parent} does not exist")
+    return suffix

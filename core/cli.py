@@ -670,21 +670,14 @@ def _cmd_export_scene(args: argparse.Namespace) -> int:
     import io
 
     from app.snapshot import bird_eye_snapshot_html
+    from core.checks import output_suffix
 
     out: Path = args.out
 
     def write(
         drive: Drive, clip: range, params: Params, params_b: Params | None, bar: ProgressBar
     ) -> str:
-        if out.suffix.lower() != SCENE_SUFFIX:
-            raise _UsageError(
-                f"OUT {out}: expected a file name ending in {SCENE_SUFFIX}, "
-                f"got {out.suffix or 'no suffix'}"
-            )
-        if out.is_dir():
-            raise _UsageError(f"OUT {out}: expected a file to write, got a folder")
-        if not out.parent.is_dir():
-            raise _UsageError(f"OUT {out}: the folder {out.parent} does not exist")
+        output_suffix("OUT", out, (SCENE_SUFFIX,))
         # viser prints a banner for its private recording server; it is nobody's business
         with contextlib.redirect_stdout(io.StringIO()):
             html = bird_eye_snapshot_html(drive, clip[0], clip[-1], params, params_b, bar)
