@@ -35,7 +35,7 @@ import viser
 
 from app.bird_eye import BirdEyeGeometry, BirdEyeScene, pose_of_views
 from app.draw import RgbImage
-from app.view import FrameSource, b_offset_y_m, bird_eye_view
+from app.view import FrameSource, b_offset_y_m, bird_eye_view, check_clip
 from core.engine import FusionEngine
 from core.params import Params
 
@@ -52,7 +52,7 @@ BirdEyeView = tuple[BirdEyeGeometry, RgbImage]
 def clip_duration_s(drive: FrameSource, first_frame: int, last_frame: int) -> float:
     """How long the recording of frames first_frame .. last_frame of `drive` plays (module
     docstring): their span plus one median frame interval."""
-    _check_clip(drive, first_frame, last_frame)
+    check_clip(drive, first_frame, last_frame)
     times = drive.times_ns
     span_s = (int(times[last_frame]) - int(times[first_frame])) / NS_PER_S
     return span_s + _hold_s(drive)
@@ -76,7 +76,7 @@ def bird_eye_snapshot_html(
     naming first_frame or last_frame when they are not frames of the drive in order;
     `core.io.errors.RecordingError` when a frame of the clip cannot be read.
     """
-    _check_clip(drive, first_frame, last_frame)
+    check_clip(drive, first_frame, last_frame)
     engines = [FusionEngine(params, drive.camera)]
     if params_b is not None:
         engines.append(FusionEngine(params_b, drive.camera))
@@ -134,16 +134,3 @@ def _interval_s(drive: FrameSource, index: int, following: int | None) -> float:
         return _hold_s(drive)
     times = drive.times_ns
     return max(0.0, (int(times[following]) - int(times[index])) / NS_PER_S)
-
-
-def _check_clip(drive: FrameSource, first_frame: int, last_frame: int) -> None:
-    count = len(drive)
-    if not 0 <= first_frame < count:
-        raise ValueError(
-            f"first_frame: expected a frame of {drive.path} (0 .. {count - 1}), got {first_frame}"
-        )
-    if not first_frame <= last_frame < count:
-        raise ValueError(
-            f"last_frame: expected a frame of {drive.path} from first_frame {first_frame} to "
-            f"{count - 1}, got {last_frame}"
-        )

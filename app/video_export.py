@@ -50,7 +50,7 @@ from app import draw
 from app.engines import FrameCache
 from app.state import DEMO_LAYERS, Layers
 from app.video_frame import video_frame
-from app.view import AB_GAP_PX, FrameSource
+from app.view import AB_GAP_PX, FrameSource, check_clip
 from core.checks import output_suffix
 from core.engine import FusionEngine
 from core.params import Params, params_hash
@@ -252,14 +252,6 @@ def _even(rgb: draw.RgbImage) -> draw.RgbImage:
     return out
 
 
-def _check_clip(drive: FrameSource, first_frame: int, last_frame: int) -> None:
-    n = len(drive)
-    if not 0 <= first_frame < n:
-        raise ValueError(f"first_frame: expected a frame 0..{n - 1}, got {first_frame}")
-    if not first_frame <= last_frame < n:
-        raise ValueError(f"last_frame: expected a frame {first_frame}..{n - 1}, got {last_frame}")
-
-
 def gif_default_width_px(camera_width_px: int, pictures: int) -> int:
     """A GIF's default width: `GIF_PICTURE_WIDTH_PX` per camera picture of
     `camera_width_px`, `pictures` (A, or A and B) side by side with their gap scaled alike."""
@@ -304,7 +296,7 @@ def export_video(
     succeeds."""
     started, started_cpu = time.perf_counter(), time.process_time()
     fmt = video_format(out_path)
-    _check_clip(drive, first_frame, last_frame)
+    check_clip(drive, first_frame, last_frame)
     rate = frame_rate(drive)
     if gif_width_px is not None:
         if fmt != "gif":

@@ -321,3 +321,18 @@ def median_timings(timings: Sequence[StageTimings]) -> StageTimings:
     return StageTimings(
         *(statistics.median(getattr(t, f.name) for t in timings) for f in fields(StageTimings))
     )
+
+
+def check_clip(drive: FrameSource, first_frame: int, last_frame: int) -> None:
+    """ValueError naming first_frame or last_frame unless they are frames of `drive` in
+    order (a clip, both included)."""
+    count = len(drive)
+    if not 0 <= first_frame < count:
+        raise ValueError(
+            f"first_frame: expected a frame of {drive.path} (0 .. {count - 1}), got {first_frame}"
+        )
+    if not first_frame <= last_frame < count:
+        raise ValueError(
+            f"last_frame: expected a frame of {drive.path} from first_frame {first_frame} to "
+            f"{count - 1}, got {last_frame}"
+        )

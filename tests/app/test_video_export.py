@@ -198,9 +198,9 @@ def test_failed_export_leaves_the_old_file_and_no_partial(drive: Drive, tmp_path
 
 
 def test_export_refuses_a_clip_outside_the_drive(drive: Drive, tmp_path: Path) -> None:
-    with pytest.raises(ValueError, match=r"first_frame: expected a frame 0\.\.149, got 150"):
+    with pytest.raises(ValueError, match=r"first_frame: expected a frame of .*, got 150"):
         export_video(drive, tmp_path / "x.mp4", 150, 150)
-    with pytest.raises(ValueError, match=r"last_frame: expected a frame 5\.\.149, got 4"):
+    with pytest.raises(ValueError, match=r"last_frame: expected .* first_frame 5 to 149, got 4"):
         export_video(drive, tmp_path / "x.mp4", 5, 4)
     with pytest.raises(ValueError, match=r"gif_width_px: only for a \.gif"):
         export_video(drive, tmp_path / "x.mp4", 5, 5, gif_width_px=100)
