@@ -31,6 +31,7 @@ TEXTURE_S_M = 0.05  # texture cell along s
 TEXTURE_D_M = 0.1  # texture cell across the road
 TEXTURE_D_RANGE_M = (-45.0, 45.0)
 TEXTURE_LEVELS = 9  # each level doubles the cell along s
+GATHER_BAND_ROWS = 16384  # texture rows handed to cv2.remap at once (it takes < 32767)
 MARKING_GREY = 210
 DASH_ON_M, DASH_PERIOD_M = 4.5, 12.0
 ZEBRA_DEPTH_M, ZEBRA_BAR_M = 3.0, 0.5
@@ -211,7 +212,27 @@ class RoadTexture:
 def _gather(
     img: npt.NDArray[np.float32], col: npt.NDArray[np.float32], row: npt.NDArray[np.float32]
 ) -> npt.NDArray[np.float32]:
-    """Bilinear samples of img at (col, row) (N,) with edge clamping, via cv2.remap."""
+    """Bilinear samples of img at (col, row) (N,) with edge clamping, via cv2.remap.
+
+    remap takes images under 32767 rows (SHRT_MAX) and a long drive's texture has more, so
+    the samples go to it in bands of `GATHER_BAND_ROWS` rows, each with only the rows its
+    samples fall between (and the clamped edge rows when a sample lies beyond one): the same
+    samples.
+    """
+    out = np.empty(len(col), dtype=np.float32)
+    last = img.shape[0] - 1
+    band = np.clip(np.floor(row), 0, last).astype(np.int64) // GATHER_BAND_ROWS
+    for b in np.unique(band):
+        sel = band == b
+        r0 = int(b) * GATHER_BAND_ROWS
+        r1 = min(r0 + GATHER_BAND_ROWS + 1, last + 1)
+        out[sel] = _remap(img[r0:r1], col[sel], row[sel] - np.float32(r0))
+    return out
+
+
+def _remap(
+    img: npt.NDArray[np.float32], col: npt.NDArray[np.float32], row: npt.NDArray[np.float32]
+) -> npt.NDArray[np.float32]:
     n = len(col)
     width = 1024
     h = (n + width - 1) // width

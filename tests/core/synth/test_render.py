@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from core.synth import render
 from core.synth.generate import CAMERA_PITCH_RAD, synthetic_calibration
 from core.synth.render import Renderer
 from core.synth.scenarios import SCENARIOS
@@ -127,3 +128,14 @@ def test_guard_rail_truth_lies_inside_the_image_and_follows_the_frame_pitch() ->
     far_level = min(np.array(r.polyline_px)[:, 1].min() for r in level.guard_rails)
     far_pitched = min(np.array(r.polyline_px)[:, 1].min() for r in pitched.guard_rails)
     assert far_pitched < far_level - 3
+
+
+def test_a_long_drives_texture_is_sampled_beyond_opencvs_remap_limit() -> None:
+    """remap takes images under 32767 rows; a minute of highway is a longer texture."""
+    rows = np.arange(40_000, dtype=np.float32)[:, None] * np.ones((1, 6), np.float32)
+    texture = rows + np.arange(6, dtype=np.float32)[None, :] * 0.25
+    row = np.array([-3.0, 0.0, 35_000.25, 39_998.5, 39_999.0, 41_000.0], np.float32)
+    col = np.array([0.0, 1.5, 2.0, 4.0, 5.0, 9.0], np.float32)
+    expected = np.clip(row, 0, 39_999) + np.clip(col, 0, 5) * 0.25  # bilinear, edges clamped
+    np.testing.assert_allclose(render._gather(texture, col, row), expected, rtol=0, atol=0.02)
+    assert render._gather(texture, col[:0], row[:0]).shape == (0,)
