@@ -81,7 +81,9 @@ class ExportSummary:
     """What an export wrote: the file, the drive's frames first_frame..last_frame (both
     included), the picture's (width, height) in px, the frame rate, the file's size, and the
     wall-clock and CPU time the export took (engine warm-up, engine, drawing and encoding;
-    CPU: this process's, all threads)."""
+    CPU: this process's, all threads), and of that the wall-clock time of its first frame
+    (the engine replays its window before it; the first engine of a process also loads
+    its compiled numba code, about a second)."""
 
     path: Path
     first_frame: int
@@ -91,6 +93,7 @@ class ExportSummary:
     file_bytes: int
     elapsed_s: float
     cpu_s: float
+    first_frame_s: float
 
     @property
     def frames(self) -> int:
@@ -110,16 +113,24 @@ class ExportSummary:
         """How many times faster than the clip plays the export ran."""
         return self.clip_s / self.elapsed_s if self.elapsed_s > 0 else float("inf")
 
+    @property
+    def steady_real_time_multiple(self) -> float:
+        """The same after the first frame: how fast the frames follow one another."""
+        after_s = self.elapsed_s - self.first_frame_s
+        return (self.frames - 1) / self.frame_rate_hz / after_s if after_s > 0 else float("inf")
+
 
 def summary_text(summary: ExportSummary) -> str:
-    """One line: file, frames, picture size, size on disk, seconds, frames/s, x real time."""
+    """One line: file, frames, picture size, size on disk, seconds, frames/s, x real time
+    (also after the first frame)."""
     w, h = summary.size_px
     return (
         f"{summary.path}: {summary.frames} frames ({summary.first_frame}-{summary.last_frame}, "
         f"{summary.clip_s:.1f} s at {summary.frame_rate_hz:g} fps), {w}x{h}, "
         f"{summary.file_bytes / 1e6:.1f} MB, in {summary.elapsed_s:.2f} s: "
         f"{summary.frames_per_s:.0f} frames/s, {summary.real_time_multiple:.1f}x real time "
-        f"({summary.cpu_s:.2f} s CPU)"
+        f"({summary.cpu_s:.2f} s CPU; the first frame {summary.first_frame_s:.2f} s, after it "
+        f"{summary.steady_real_time_multiple:.1f}x real time)"
     )
 
 
@@ -324,6 +335,7 @@ def export_video(
     writer: _Writer | None = None
     try:
         first = picture(first_frame)
+        first_frame_s = time.perf_counter() - started
         size_px = (first.shape[1], first.shape[0])
         writer = (_Mp4Writer if fmt == "mp4" else _GifWriter)(partial, size_px, rate)
         for done, index in enumerate(range(first_frame, last_frame + 1), start=1):
@@ -348,4 +360,5 @@ def export_video(
         out_path.stat().st_size,
         time.perf_counter() - started,
         time.process_time() - started_cpu,
+        first_frame_s,
     )

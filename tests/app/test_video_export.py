@@ -275,3 +275,9 @@ def test_cli_never_writes_over_a_folder(tmp_path: Path, capsys: pytest.CaptureFi
     assert "expected a file to write, got a folder" in capsys.readouterr().err
     assert folder.is_dir() and list(folder.iterdir()) == []
     assert list(tmp_path.iterdir()) == [folder]
+
+
+def test_the_speed_after_the_first_frame_leaves_out_its_warm_up() -> None:
+    summary = ExportSummary(Path("x.mp4"), 0, 100, (640, 570), 10.0, 1, 3.0, 3.0, 1.0)
+    assert summary.real_time_multiple == pytest.approx(101 / 10 / 3.0)
+    assert summary.steady_real_time_multiple == pytest.approx(100 / 10 / 2.0)
