@@ -55,6 +55,7 @@ class PresenterSession:
         )
         self._clip: Clip = link.clip or (0, 0)
         self._wanted_clip = link.clip
+        self._inspector_panels = link.panels  # handed back to the inspector on leaving
         self._frame_rate_hz = 0.0
         self._request: Callable[[ViewState], None] | None = None
         self._player = Player(f"presenter-{client.client_id}")
@@ -131,7 +132,8 @@ class PresenterSession:
     def link(self) -> ViewLink:
         """What this tab shows, as a link (the inspector it goes back to opens it)."""
         s = self._state
-        return ViewLink(self.recording, s.frame, s.layers, None, s.params, s.params_b, self._clip)
+        panels = self._inspector_panels
+        return ViewLink(self.recording, s.frame, s.layers, panels, s.params, s.params_b, self._clip)
 
     def set_playing(self, playing: bool) -> None:
         if playing:
