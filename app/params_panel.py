@@ -53,7 +53,7 @@ def hint(name: str, paper_value: object) -> str:
 
 
 NO_CHOICE = "(none)"
-NoticeColour = Literal["red", "green", "gray"]
+NoticeColour = Literal["red", "green", "gray", "yellow"]
 
 
 class ParamsPanel:

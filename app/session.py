@@ -269,6 +269,11 @@ class ClientSession:
         last = self._frame_count - 1
         if link.clip is not None and link.clip[1] <= last:
             self._set_clip(link.clip)
+        elif link.clip is not None:
+            clip = f"{link.clip[0]}-{link.clip[1]}"
+            self.notify(
+                "Clip left out", f"clip: expected frames up to {last}, got {clip}", "yellow"
+            )
         for name, box in self._layer_boxes.items():
             box.value = getattr(link.layers or Layers(), name)  # type: ignore[misc]
         panels = link.panels or Panels()
@@ -495,6 +500,8 @@ class ClientSession:
         if self._play is not None:
             self._play.label = "Pause" if playing else "Play"
             self._play.icon = viser.Icon.PLAYER_PAUSE if playing else viser.Icon.PLAYER_PLAY
+        if not playing:
+            self._show_link()  # where playback stopped
 
     def notify(self, title: str, message: str, color: NoticeColour = "red") -> None:
         """A notification in this tab's page (a refused value, a saved preset)."""
