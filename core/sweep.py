@@ -583,7 +583,14 @@ def _client(address: str) -> Client:
     that accepts the connection but speaks no Dask (say, a web server) would otherwise hold
     it for ever, past distributed's own timeout."""
     import distributed
+    from distributed.comm.addressing import get_address_host_port
 
+    try:  # the address's form, checked here: a loaded machine may not answer in time
+        get_address_host_port(address)
+    except ValueError as err:
+        raise SweepError(
+            f"--scheduler {address}: not a scheduler's address ({err}); expected tcp://HOST:PORT"
+        ) from None
     box: dict[str, Any] = {}
 
     def attempt() -> None:
@@ -597,11 +604,6 @@ def _client(address: str) -> Client:
     thread.join(CONNECT_TIMEOUT_S + 1.0)
     if "client" in box:
         return cast("Client", box["client"])
-    if isinstance(box.get("error"), ValueError):
-        raise SweepError(
-            f"--scheduler {address}: not a scheduler's address ({box['error']}); expected "
-            "tcp://HOST:PORT"
-        )
     why = f"{type(box['error']).__name__}: {box['error']}" if "error" in box else "no answer"
     raise SweepError(
         f"--scheduler {address}: no Dask scheduler answered within {CONNECT_TIMEOUT_S:g} s "
