@@ -353,20 +353,34 @@ def draw_pitch(rgb: RgbImage, pitch: PitchResult, camera: CameraModel) -> RgbIma
 def draw_track_ids(rgb: RgbImage, tracks: Sequence[Track]) -> RgbImage:
     """A "#id" tag under the bottom-left corner of each track's last box, in the colour of
     its kind (vehicles `VEHICLE_COLOUR`, pedestrians `PEDESTRIAN_COLOUR`); a track missed
-    this frame reads "#id ?" (its box is an older frame's). Guard-rail tracks are skipped.
+    this frame reads "#id ?" (its box is an older frame's). A tag that would cover one drawn
+    before goes under it. Guard-rail tracks are skipped.
 
     tracks: e.g. `FrameResult.tracked_vehicles + FrameResult.tracked_pedestrians`.
     """
     out = _start(rgb)
     (_, text_h), baseline = cv2.getTextSize("#0", FONT, TAG_FONT_SCALE, 1)
+    tag_h = text_h + baseline
+    placed: list[tuple[int, int, int, int]] = []  # the tags drawn: (u0, v0, u1, v1)
     for t in tracks:
         if t.kind == "guard_rail":
             continue
         colour = VEHICLE_COLOUR if t.kind == "vehicle" else PEDESTRIAN_COLOUR
         u0, _, _, v1 = t.box_px
         text = f"#{t.id}" if t.misses == 0 else f"#{t.id} ?"
-        _tag(out, text, u0, v1 + TRACK_TAG_GAP_PX + text_h + baseline, colour)
+        (w, _), _ = cv2.getTextSize(text, FONT, TAG_FONT_SCALE, 1)
+        u = max(min(round(u0), out.shape[1] - w - 3), 0)
+        bottom = round(v1) + TRACK_TAG_GAP_PX + tag_h
+        while any(_overlap((u, bottom - tag_h, u + w + 2, bottom), p) for p in placed):
+            bottom += tag_h + 1  # under the tag it would cover
+        placed.append((u, bottom - tag_h, u + w + 2, bottom))
+        _tag(out, text, u, bottom, colour)
     return out
+
+
+def _overlap(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> bool:
+    """Whether two (u0, v0, u1, v1) rectangles share a pixel."""
+    return a[0] <= b[2] and b[0] <= a[2] and a[1] <= b[3] and b[1] <= a[3]
 
 
 # --- all layers of a FrameResult ------------------------------------------------------------

@@ -348,6 +348,15 @@ def test_track_id_is_tagged_under_its_box_in_the_colour_of_its_kind() -> None:
     assert not out[:262].any()
 
 
+def test_tags_of_tracks_in_the_same_place_go_one_under_the_other() -> None:
+    box = (100.0, 200.0, 180.0, 260.0)
+    out = overlays.draw_track_ids(black(), [track("vehicle", box), track("pedestrian", box)])
+    vehicle_rows = np.flatnonzero(is_colour(out, overlays.VEHICLE_COLOUR).any(axis=1))
+    pedestrian_rows = np.flatnonzero(is_colour(out, overlays.PEDESTRIAN_COLOUR).any(axis=1))
+    assert vehicle_rows.size and pedestrian_rows.size
+    assert pedestrian_rows.min() > vehicle_rows.max()  # the second tag below the first
+
+
 def test_guard_rail_tracks_get_no_tag() -> None:
     assert not overlays.draw_track_ids(black(), [track("guard_rail", (1.0, 2.0, 30.0, 40.0))]).any()
 
