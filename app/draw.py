@@ -171,3 +171,15 @@ def add_caption(rgb: RgbImage, text: str) -> RgbImage:
         out, text, (TEXT_MARGIN_PX, baseline_row), FONT, FONT_SCALE, TEXT_COLOUR, 1, cv2.LINE_AA
     )
     return out
+
+
+def scaled_to_width(rgb: RgbImage, width_px: int) -> RgbImage:
+    """`rgb` scaled to `width_px` wide, its aspect kept: area averaging when it shrinks (no
+    aliasing of thin overlay lines), bilinear when it grows. The same picture when it is
+    that wide already."""
+    h, w = rgb.shape[:2]
+    if width_px == w:
+        return rgb
+    height_px = max(1, round(h * width_px / w))
+    how = cv2.INTER_AREA if width_px < w else cv2.INTER_LINEAR
+    return np.asarray(cv2.resize(rgb, (width_px, height_px), interpolation=how), dtype=np.uint8)

@@ -18,9 +18,10 @@ from dataclasses import replace
 import viser
 
 from app.bird_eye import BirdEyeViews
+from app.draw import scaled_to_width
 from app.legend import legend_strip
 from app.player import Player
-from app.presenter_view import enlarged, figures_markdown
+from app.presenter_view import figures_markdown
 from app.session import escape_markdown
 from app.state import DEMO_LAYERS, Panels, ViewState
 from app.view import FrameView
@@ -110,7 +111,7 @@ class PresenterSession:
         """Put a rendered frame on the page (if still wanted)."""
         if recording != self.recording:
             return
-        picture = enlarged(view.image, PICTURE_WIDTH_PX)
+        picture = scaled_to_width(view.image, PICTURE_WIDTH_PX)  # to fill its panel
         with self.client.atomic():
             if self._image is None:
                 with self._camera_tab:

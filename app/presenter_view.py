@@ -1,6 +1,6 @@
 """What the presenter view shows beside the pictures, for people who never read the papers:
-a few large figures of the frame and the picture enlarged to fill its panel (the legend of
-the colours is `app.legend`'s, the layers drawn `app.state.DEMO_LAYERS`).
+a few large figures of the frame (the legend of the colours is `app.legend`'s, the layers
+drawn `app.state.DEMO_LAYERS`).
 
 Pure functions of an engine result.
 """
@@ -9,20 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import cv2
-import numpy as np
-
-from app.draw import RgbImage
 from core.engine import FrameResult
-
-
-def enlarged(rgb: RgbImage, width_px: int) -> RgbImage:
-    """`rgb` scaled to `width_px` wide (bilinear), its aspect kept: the browser shows a
-    picture no wider than it is, and the presenter's camera should fill its panel."""
-    h, w = rgb.shape[:2]
-    height_px = max(1, round(h * width_px / w))
-    out = cv2.resize(rgb, (width_px, height_px), interpolation=cv2.INTER_LINEAR)
-    return np.asarray(out, dtype=np.uint8)
 
 
 @dataclass(frozen=True)

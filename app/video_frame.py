@@ -136,9 +136,5 @@ def video_frame(
     if width_px is not None and width_px != picture.shape[1]:
         if width_px < MIN_WIDTH_PX:
             raise ValueError(f"width_px: expected at least {MIN_WIDTH_PX} px, got {width_px}")
-        h, w = picture.shape[:2]
-        height = max(1, round(h * width_px / w))
-        picture = np.asarray(
-            cv2.resize(picture, (width_px, height), interpolation=cv2.INTER_AREA), dtype=np.uint8
-        )
+        picture = draw.scaled_to_width(picture, width_px)
     return with_banner(picture, stamp_of(drive, frame, params_hashes), layers)

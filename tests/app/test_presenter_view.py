@@ -1,5 +1,5 @@
-"""The presenter's layers, figures and enlarged picture (app.presenter_view), and the playback
-clock both kinds of tab use (app.player)."""
+"""The presenter's layers and figures (app.presenter_view), its enlarged picture (app.draw),
+and the playback clock both kinds of tab use (app.player)."""
 
 from __future__ import annotations
 
@@ -9,11 +9,11 @@ import threading
 import numpy as np
 from engine_frames import engine_result
 
+from app.draw import scaled_to_width
 from app.legend import legend_items
 from app.player import Player
 from app.presenter_view import (
     HeadlineFigures,
-    enlarged,
     figures_markdown,
     headline_figures,
 )
@@ -49,7 +49,7 @@ def test_the_figures_read_as_words() -> None:
 def test_an_enlarged_picture_keeps_its_aspect() -> None:
     rgb = np.zeros((300, 640, 3), np.uint8)
     rgb[:, 320:] = 200
-    big = enlarged(rgb, 960)
+    big = scaled_to_width(rgb, 960)
     assert big.shape == (450, 960, 3) and big.dtype == np.uint8
     assert big[:, :470].max() == 0 and big[:, 490:].min() == 200
 
