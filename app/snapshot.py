@@ -35,11 +35,10 @@ import viser
 
 from app.bird_eye import BirdEyeGeometry, BirdEyeScene, pose_of_views
 from app.draw import RgbImage
-from app.view import FrameSource, b_offset_y_m, bird_eye_view, check_clip
+from app.view import NS_PER_S, FrameSource, b_offset_y_m, bird_eye_view, check_clip
 from core.engine import FusionEngine
 from core.params import Params
 
-NS_PER_S = 1e9
 PRIVATE_HOST = "127.0.0.1"  # the recording server is reachable from this machine only
 ANY_FREE_PORT = 0  # the OS picks one: never the port of a running inspector
 # the inspector's node names (app.session), so a snapshot reads as the inspector's scene

@@ -25,11 +25,10 @@ import numpy as np
 from app import draw
 from app.legend import MARGIN_PX, MIN_WIDTH_PX, banner_strip, legend_strip
 from app.state import Layers, ViewState
-from app.view import FrameSource, camera_picture, side_by_side
+from app.view import FrameSource, camera_picture, seconds_from_start, side_by_side
 from core.engine import FrameResult
 from core.io.frame import FrameInput
 
-NS_PER_S = 1e9
 TITLE_FONT_SCALE = 0.5
 TITLE_HEIGHT_PX = 26
 SEPARATOR = "  |  "  # the font's space is narrow: with one each side it reads "a |b"
@@ -57,7 +56,7 @@ class Stamp:
 
 def stamp_of(drive: FrameSource, frame: FrameInput, params_hashes: Sequence[str]) -> Stamp:
     """The stamp of `frame` of `drive`: its time counted from the drive's first frame."""
-    t_s = (frame.t_ns - int(drive.times_ns[0])) / NS_PER_S
+    t_s = seconds_from_start(drive, frame.t_ns)
     return Stamp(drive.name, frame.index, len(drive), t_s, tuple(params_hashes))
 
 

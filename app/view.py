@@ -164,7 +164,7 @@ def render_view(
     indices = (result.index, frame.index) + (() if result_b is None else (result_b.index,))
     if any(i != state.frame for i in indices):
         raise ValueError(f"result, frame: expected frame {state.frame}, got {indices}")
-    t_s = (frame.t_ns - int(drive.times_ns[0])) / NS_PER_S
+    t_s = seconds_from_start(drive, frame.t_ns)
     text = readout_text(state.frame, len(drive), t_s, frame.speed_mps, frame.yaw_rate_radps)
     preview = result.preview or (result_b is not None and result_b.preview)
     if preview:
@@ -336,3 +336,9 @@ def check_clip(drive: FrameSource, first_frame: int, last_frame: int) -> None:
             f"last_frame: expected a frame of {drive.path} from first_frame {first_frame} to "
             f"{count - 1}, got {last_frame}"
         )
+
+
+def seconds_from_start(drive: FrameSource, t_ns: int) -> float:
+    """The time `t_ns` as seconds from the drive's first frame (as the read-out and the
+    exports' banner give it)."""
+    return (t_ns - int(drive.times_ns[0])) / NS_PER_S
