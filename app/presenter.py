@@ -54,8 +54,7 @@ class PresenterSession:
             params_b=link.params_b,
             panels=PRESENTER_PANELS,
         )
-        self._clip: Clip = link.clip or (0, 0)
-        self._wanted_clip = link.clip
+        self._clip: Clip | None = link.clip  # the link's until `show_drive` knows the drive
         self._inspector_panels = link.panels  # handed back to the inspector on leaving
         self._frame_rate_hz = 0.0
         self._request: Callable[[ViewState], None] | None = None
@@ -89,7 +88,7 @@ class PresenterSession:
         """Play the clip of the link (the whole drive when it named none or one past the
         drive's end) of drive `name`, from the link's frame."""
         last = frame_count - 1
-        clip = self._wanted_clip or (0, last)
+        clip = self._clip or (0, last)
         if clip[1] > last:
             clip = (0, last)
         with self._lock:
@@ -150,7 +149,7 @@ class PresenterSession:
     def _next_frame(self) -> bool:
         """One frame on; after the clip's last, its first."""
         with self._lock:
-            first, last = self._clip
+            first, last = self._clip or (0, 0)  # set by show_drive, which starts the player
             frame = self._state.frame + 1
             self._state = replace(self._state, frame=first if frame > last else frame)
         self._submit()
