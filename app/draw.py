@@ -53,7 +53,9 @@ TEXT_MARGIN_PX = 6
 def grey_to_rgb(image: GreyImage) -> RgbImage:
     """(H, W) uint8 grey -> (H, W, 3) uint8 RGB with equal channels."""
     require_grey_image("image", image)
-    return np.repeat(image[:, :, None], 3, axis=2)
+    if image.size == 0:  # OpenCV refuses an empty image
+        return np.zeros((*image.shape, 3), dtype=np.uint8)
+    return np.asarray(cv2.cvtColor(image, cv2.COLOR_GRAY2RGB), dtype=np.uint8)
 
 
 def require_rgb_image(name: str, image: object) -> None:
@@ -85,21 +87,20 @@ def put_tag(
     cv2.putText(out, text, (u_px + 1, top + h), FONT, font_scale, text_colour, 1, cv2.LINE_AA)
 
 
-def draw_road_crosses(
-    rgb: RgbImage,
+def put_road_crosses(
+    out: RgbImage,
     road_points_m: Sequence[tuple[float, float]],
     camera: CameraModel,
     colours: Sequence[Rgb],
     labels: Sequence[str],
     label_offset_px: tuple[int, int],
     font_scale: float,
-) -> RgbImage:
-    """A cross (`RADAR_CROSS_SIZE_PX`) where each road point (x_m, y_m, 0) projects, in its
-    colour, with its label `label_offset_px` (right, down) from the centre. Points behind the
-    camera are skipped; crosses outside the image are clipped by OpenCV."""
-    out = rgb.copy()
+) -> None:
+    """In place: a cross (`RADAR_CROSS_SIZE_PX`) where each road point (x_m, y_m, 0)
+    projects, in its colour, with its label `label_offset_px` (right, down) from the centre.
+    Points behind the camera are skipped; crosses outside the image are clipped by OpenCV."""
     if not road_points_m:
-        return out
+        return
     pts_vehicle_m = np.array([[x, y, 0.0] for x, y in road_points_m])
     uv_px, in_front = camera.project(pts_vehicle_m)
     du, dv = label_offset_px
@@ -112,7 +113,6 @@ def draw_road_crosses(
         )
         at = (centre[0] + du, centre[1] + dv)
         cv2.putText(out, label, at, FONT, font_scale, colour, 1, cv2.LINE_AA)
-    return out
 
 
 def draw_radar(rgb: RgbImage, targets: Sequence[RadarTarget], camera: CameraModel) -> RgbImage:
@@ -120,8 +120,9 @@ def draw_radar(rgb: RgbImage, targets: Sequence[RadarTarget], camera: CameraMode
 
     Targets behind the camera are skipped; crosses outside the image are clipped by OpenCV.
     """
-    return draw_road_crosses(
-        rgb,
+    out = rgb.copy()
+    put_road_crosses(
+        out,
         [(t.x_m, t.y_m) for t in targets],
         camera,
         [RADAR_COLOUR] * len(targets),
@@ -129,6 +130,7 @@ def draw_radar(rgb: RgbImage, targets: Sequence[RadarTarget], camera: CameraMode
         (RADAR_CROSS_SIZE_PX // 2 + 2, -2),
         FONT_SCALE,
     )
+    return out
 
 
 def draw_truth(rgb: RgbImage, truth: FrameTruth | None) -> RgbImage:
@@ -149,14 +151,12 @@ def draw_truth(rgb: RgbImage, truth: FrameTruth | None) -> RgbImage:
     return out
 
 
-def draw_horizon(rgb: RgbImage, camera: CameraModel) -> RgbImage:
-    """The road plane's vanishing line from the left to the right image border."""
-    out = rgb.copy()
+def put_horizon(out: RgbImage, camera: CameraModel) -> None:
+    """In place: the road plane's vanishing line from the left to the right image border."""
     right_px = out.shape[1] - 1
     v_left = camera.horizon_row_px(0.0)
     v_right = camera.horizon_row_px(float(right_px))
     cv2.line(out, (0, round(v_left)), (right_px, round(v_right)), HORIZON_COLOUR, 1)
-    return out
 
 
 def add_caption(rgb: RgbImage, text: str) -> RgbImage:

@@ -69,7 +69,7 @@ LEGEND: Mapping[str, tuple[LegendItem, ...]] = {
     "tracks": (LegendItem("tag", overlays.VEHICLE_COLOUR, "the same object followed over time"),),
     "truth": (LegendItem("box", draw.CLASS_COLOURS["car"], "ground truth"),),
 }
-TAG_TEXT = "#7"  # the "tag" mark: a track tag as `app.overlays.draw_track_ids` draws it
+TAG_TEXT = "#7"  # the "tag" mark: a track tag as `app.overlays.put_track_ids` draws it
 
 
 def legend_items(layers: Layers) -> tuple[LegendItem, ...]:

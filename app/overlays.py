@@ -1,9 +1,10 @@
 """Overlays of one engine frame on the camera picture: one pure function per layer.
 
-Each function takes an RGB picture of the full camera frame and parts of a
-`core.engine.FrameResult`, and returns a new picture with one layer drawn, so the inspector
-can toggle layers by choosing which functions it chains. `LAYERS` names them all with one
-signature, (rgb, result) -> rgb.
+Each `put_*` function draws one layer in place on an RGB picture of the full camera frame,
+from parts of a `core.engine.FrameResult`, so the inspector can toggle layers by choosing
+which functions it runs. `LAYERS` names them all with one signature, (out, result) -> None;
+`draw_layers` draws the chosen ones on a copy. (In place: a copy of a camera picture per
+layer was a fifth of an exported video frame's drawing time.)
 
 Colours follow the papers where they say: paper 000 fig. 5 (vehicles: orange box, yellow
 cross for the radar target that refined it, blue crosses for discarded ones), fig. 6-7
@@ -37,8 +38,8 @@ from app.draw import (
     TEXT_COLOUR,
     Rgb,
     RgbImage,
-    draw_horizon,
-    draw_road_crosses,
+    put_horizon,
+    put_road_crosses,
     put_tag,
     require_rgb_image,
 )
@@ -130,11 +131,6 @@ def _outline(out: RgbImage, box_edges_px: Box, colour: Rgb, thickness_px: int) -
         cv2.rectangle(out, (c0 + k, r0 + k), (c1 - k, r1 - k), colour, 1)
 
 
-def _start(rgb: RgbImage) -> RgbImage:
-    require_rgb_image("rgb", rgb)
-    return rgb.copy()
-
-
 def _tag(
     out: RgbImage,
     text: str,
@@ -152,20 +148,19 @@ def _tag(
 # --- radar and vehicles (paper 000 fig. 5, paper 001) ----------------------------------------
 
 
-def draw_radar_targets(
-    rgb: RgbImage, targets: Sequence[TargetResult], camera: CameraModel
-) -> RgbImage:
-    """A cross where each radar target's road point (x_m, y_m, 0) projects with `camera` (the
-    frame's, its pitch included), coloured by `radar_colour` of its verdict, labelled with its
-    distance ahead x_m (the vehicles' `distance_m`; `app.draw.draw_radar` shows the range).
+def put_radar_targets(out: RgbImage, targets: Sequence[TargetResult], camera: CameraModel) -> None:
+    """In place: a cross where each radar target's road point (x_m, y_m, 0) projects with
+    `camera` (the frame's, its pitch included), coloured by `radar_colour` of its verdict,
+    labelled with its distance ahead x_m (the vehicles' `distance_m`; `app.draw.draw_radar`
+    shows the range).
 
     targets: `VehicleResult.targets`. Targets behind the camera are skipped; crosses off the
     image are clipped.
     """
-    require_rgb_image("rgb", rgb)
+    require_rgb_image("out", out)
     half = RADAR_CROSS_SIZE_PX // 2
-    return draw_road_crosses(
-        rgb,
+    put_road_crosses(
+        out,
         [(t.target.x_m, t.target.y_m) for t in targets],
         camera,
         [radar_colour(t.verdict) for t in targets],
@@ -175,24 +170,25 @@ def draw_radar_targets(
     )
 
 
-def draw_search_areas(rgb: RgbImage, areas: Sequence[SearchArea]) -> RgbImage:
-    """The cropped search area of each radar target (`SearchArea.box_px`), one pixel thick."""
-    out = _start(rgb)
+def put_search_areas(out: RgbImage, areas: Sequence[SearchArea]) -> None:
+    """In place: the cropped search area of each radar target (`SearchArea.box_px`), one
+    pixel thick."""
+    require_rgb_image("out", out)
     for area in areas:
         c0, r0, c1, r1 = area.box_px
         _outline(out, exclusive_to_edges((c0, r0, c1, r1)), SEARCH_AREA_COLOUR, 1)
-    return out
 
 
-def draw_vehicle_boxes(
-    rgb: RgbImage, vehicles: Sequence[Vehicle], targets: Sequence[TargetResult] = ()
-) -> RgbImage:
-    """The final vehicles' boxes in `VEHICLE_COLOUR`, and the boxes the size filter dropped
-    (targets with verdict "size_filter") in `VEHICLE_REJECTED_COLOUR` tagged "size".
+def put_vehicle_boxes(
+    out: RgbImage, vehicles: Sequence[Vehicle], targets: Sequence[TargetResult] = ()
+) -> None:
+    """In place: the final vehicles' boxes in `VEHICLE_COLOUR`, and the boxes the size
+    filter dropped (targets with verdict "size_filter") in `VEHICLE_REJECTED_COLOUR` tagged
+    "size".
 
     vehicles: `VehicleResult.vehicles`; targets: `VehicleResult.targets`.
     """
-    out = _start(rgb)
+    require_rgb_image("out", out)
     for t in targets:
         box = t.box_px
         if t.verdict == "size_filter" and box is not None:
@@ -201,7 +197,6 @@ def draw_vehicle_boxes(
             _tag(out, "size", c0, r0 - 1, VEHICLE_REJECTED_COLOUR)
     for v in vehicles:
         _outline(out, v.box_px, VEHICLE_COLOUR, BOX_THICKNESS_PX)
-    return out
 
 
 # --- guard rails (paper 002) ----------------------------------------------------------------
@@ -226,17 +221,17 @@ def _hatch(out: RgbImage, box: tuple[int, int, int, int], colour: Rgb) -> None:
     out[r0:r1, c0:c1] = sub
 
 
-def draw_guard_rails(
-    rgb: RgbImage, checks: Sequence[GuardRailCheck], areas: Sequence[SearchArea]
-) -> RgbImage:
-    """The lines the guard-rail filter followed, in image pixels: `GUARD_RAIL_LINE_COLOUR`
+def put_guard_rails(
+    out: RgbImage, checks: Sequence[GuardRailCheck], areas: Sequence[SearchArea]
+) -> None:
+    """In place: the lines the guard-rail filter followed, in image pixels: `GUARD_RAIL_LINE_COLOUR`
     (2 px) where they made a guard rail, `SHORT_LINE_COLOUR` (1 px) where too short; the
     areas labelled guard rail by overlap management, hatched in `OVERLAP_COLOUR`.
 
     checks: `GuardRailResult.checks`; areas: the frame's search areas (matched by
     target_index; a check without its area is skipped).
     """
-    out = _start(rgb)
+    require_rgb_image("out", out)
     by_target = {a.target_index: a for a in areas}
     for check in checks:
         area = by_target.get(check.target_index)
@@ -251,36 +246,35 @@ def draw_guard_rails(
         rail = check.verdict == "guard_rail"
         colour = GUARD_RAIL_LINE_COLOUR if rail else SHORT_LINE_COLOUR
         cv2.polylines(out, [pts], False, colour, LINE_THICKNESS_PX if rail else 1)
-    return out
 
 
 # --- pedestrians (paper 000 II-D, fig. 6-7) -----------------------------------------------
 
 
-def draw_pedestrian_strip(rgb: RgbImage, strip_rows_px: tuple[int, int]) -> RgbImage:
-    """The search strip: rows first .. stop - 1 blended with `STRIP_GREY` (`STRIP_ALPHA`)."""
-    out = _start(rgb)
+def put_pedestrian_strip(out: RgbImage, strip_rows_px: tuple[int, int]) -> None:
+    """In place: the search strip, rows first .. stop - 1 blended with `STRIP_GREY`
+    (`STRIP_ALPHA`)."""
+    require_rgb_image("out", out)
     first, stop = max(strip_rows_px[0], 0), min(strip_rows_px[1], out.shape[0])
     if stop > first:
         band = out[first:stop].astype(np.float32)
         grey = np.array(STRIP_GREY, dtype=np.float32)
         out[first:stop] = np.round((1 - STRIP_ALPHA) * band + STRIP_ALPHA * grey).astype(np.uint8)
-    return out
 
 
-def draw_pedestrians(
-    rgb: RgbImage,
+def put_pedestrians(
+    out: RgbImage,
     candidates: Sequence[PedestrianCandidate],
     verdicts: Collection[str] | None = None,
-) -> RgbImage:
-    """Each candidate's extended box: kept ones in `PEDESTRIAN_COLOUR`, rejected ones in
+) -> None:
+    """In place: each candidate's extended box: kept ones in `PEDESTRIAN_COLOUR`, rejected ones in
     `PEDESTRIAN_REJECTED_COLOUR` (1 px) with their `PEDESTRIAN_REASONS` word on a tag
     above.
 
     candidates: `PedestrianResult.candidates`; verdicts: draw only the candidates with
     these verdicts (all when None). Kept boxes are drawn last, on top.
     """
-    out = _start(rgb)
+    require_rgb_image("out", out)
     shown = [c for c in candidates if verdicts is None or c.verdict in verdicts]
     ordered = sorted(shown, key=lambda c: c.verdict == "pedestrian")
     for c in ordered:
@@ -292,7 +286,6 @@ def draw_pedestrians(
         c0, r0, _, _ = box_pixels(box)
         reason = PEDESTRIAN_REASONS.get(c.verdict, c.verdict)
         _tag(out, reason, c0, r0 - 1, PEDESTRIAN_REJECTED_COLOUR, TEXT_COLOUR)
-    return out
 
 
 # --- pitch (paper 000 II-A, fig. 2) ---------------------------------------------------------
@@ -314,14 +307,15 @@ def line_segments_px(lines: Lines, top_row_px: float | None = None) -> np.ndarra
     return np.stack([u_top, v_top, u_bottom, v_bottom], axis=1)
 
 
-def draw_pitch(rgb: RgbImage, pitch: PitchResult, camera: CameraModel) -> RgbImage:
-    """The pitch detector's work (paper 000 fig. 2): the chosen lines in `LINE_HINT_COLOUR`
-    up to the vanishing point's row, their used intersections as red circles, the
-    calibrated vanishing point (green cross), the detected one (red cross), and the horizon
-    of `camera` (the frame's, with the detected pitch) in `app.draw.HORIZON_COLOUR`.
+def put_pitch(out: RgbImage, pitch: PitchResult, camera: CameraModel) -> None:
+    """In place: the pitch detector's work (paper 000 fig. 2): the chosen lines in
+    `LINE_HINT_COLOUR` up to the vanishing point's row, their used intersections as red
+    circles, the calibrated vanishing point (green cross), the detected one (red cross), and
+    the horizon of `camera` (the frame's, with the detected pitch) in
+    `app.draw.HORIZON_COLOUR`.
     """
-    require_rgb_image("rgb", rgb)
-    out = draw_horizon(rgb, camera)
+    require_rgb_image("out", out)
+    put_horizon(out, camera)
     vp = pitch.vanishing_point_px
     top = float(vp[1]) if vp is not None else pitch.horizon_row_px
     for u0, v0, u1, v1 in line_segments_px(pitch.chosen, top):
@@ -344,21 +338,20 @@ def draw_pitch(rgb: RgbImage, pitch: PitchResult, camera: CameraModel) -> RgbIma
             VP_CROSS_SIZE_PX,
             LINE_THICKNESS_PX,
         )
-    return out
 
 
 # --- tracks (core.tracking) -----------------------------------------------------------------
 
 
-def draw_track_ids(rgb: RgbImage, tracks: Sequence[Track]) -> RgbImage:
-    """A "#id" tag under the bottom-left corner of each track's last box, in the colour of
+def put_track_ids(out: RgbImage, tracks: Sequence[Track]) -> None:
+    """In place: a "#id" tag under the bottom-left corner of each track's last box, in the colour of
     its kind (vehicles `VEHICLE_COLOUR`, pedestrians `PEDESTRIAN_COLOUR`); a track missed
     this frame reads "#id ?" (its box is an older frame's). A tag that would cover one drawn
     before goes under it. Guard-rail tracks are skipped.
 
     tracks: e.g. `FrameResult.tracked_vehicles + FrameResult.tracked_pedestrians`.
     """
-    out = _start(rgb)
+    require_rgb_image("out", out)
     (_, text_h), baseline = cv2.getTextSize("#0", FONT, TAG_FONT_SCALE, 1)
     tag_h = text_h + baseline
     placed: list[tuple[int, int, int, int]] = []  # the tags drawn: (u0, v0, u1, v1)
@@ -375,7 +368,6 @@ def draw_track_ids(rgb: RgbImage, tracks: Sequence[Track]) -> RgbImage:
             bottom += tag_h + 1  # under the tag it would cover
         placed.append((u, bottom - tag_h, u + w + 2, bottom))
         _tag(out, text, u, bottom, colour)
-    return out
 
 
 def _overlap(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> bool:
@@ -385,48 +377,48 @@ def _overlap(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> bool
 
 # --- all layers of a FrameResult ------------------------------------------------------------
 
-Layer = Callable[[RgbImage, FrameResult], RgbImage]
+Layer = Callable[[RgbImage, FrameResult], None]  # draws in place
 
 
-def _radar_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
-    return draw_radar_targets(rgb, r.vehicle.targets, r.camera)
+def _radar_layer(out: RgbImage, r: FrameResult) -> None:
+    put_radar_targets(out, r.vehicle.targets, r.camera)
 
 
-def _areas_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
-    return draw_search_areas(rgb, r.areas)
+def _areas_layer(out: RgbImage, r: FrameResult) -> None:
+    put_search_areas(out, r.areas)
 
 
-def _vehicles_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
-    return draw_vehicle_boxes(rgb, r.vehicle.vehicles)
+def _vehicles_layer(out: RgbImage, r: FrameResult) -> None:
+    put_vehicle_boxes(out, r.vehicle.vehicles)
 
 
-def _rejected_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
-    out = draw_vehicle_boxes(rgb, (), r.vehicle.targets)
-    return draw_pedestrians(out, r.pedestrian.candidates, REJECTED_BY_FUSION)
+def _rejected_layer(out: RgbImage, r: FrameResult) -> None:
+    put_vehicle_boxes(out, (), r.vehicle.targets)
+    put_pedestrians(out, r.pedestrian.candidates, REJECTED_BY_FUSION)
 
 
-def _rails_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
-    return draw_guard_rails(rgb, r.guardrail.checks, r.areas)
+def _rails_layer(out: RgbImage, r: FrameResult) -> None:
+    put_guard_rails(out, r.guardrail.checks, r.areas)
 
 
-def _strip_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
-    return draw_pedestrian_strip(rgb, r.pedestrian.strip_rows_px)
+def _strip_layer(out: RgbImage, r: FrameResult) -> None:
+    put_pedestrian_strip(out, r.pedestrian.strip_rows_px)
 
 
-def _pedestrians_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
-    return draw_pedestrians(rgb, r.pedestrian.candidates, ("pedestrian",))
+def _pedestrians_layer(out: RgbImage, r: FrameResult) -> None:
+    put_pedestrians(out, r.pedestrian.candidates, ("pedestrian",))
 
 
-def _pruned_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
-    return draw_pedestrians(rgb, r.pedestrian.candidates, CONSTRAINT_VERDICTS)
+def _pruned_layer(out: RgbImage, r: FrameResult) -> None:
+    put_pedestrians(out, r.pedestrian.candidates, CONSTRAINT_VERDICTS)
 
 
-def _pitch_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
-    return draw_pitch(rgb, r.pitch, r.camera)
+def _pitch_layer(out: RgbImage, r: FrameResult) -> None:
+    put_pitch(out, r.pitch, r.camera)
 
 
-def _tracks_layer(rgb: RgbImage, r: FrameResult) -> RgbImage:
-    return draw_track_ids(rgb, r.tracked_vehicles + r.tracked_pedestrians)
+def _tracks_layer(out: RgbImage, r: FrameResult) -> None:
+    put_track_ids(out, r.tracked_vehicles + r.tracked_pedestrians)
 
 
 # In drawing order, back to front: the strip first, text last.
@@ -444,13 +436,20 @@ LAYERS: Mapping[str, Layer] = {
 }
 
 
-def draw_layers(rgb: RgbImage, result: FrameResult, names: Sequence[str]) -> RgbImage:
-    """The layers `names` (keys of `LAYERS`) of `result` on `rgb`, in `LAYERS` order."""
+def put_layers(out: RgbImage, result: FrameResult, names: Sequence[str]) -> None:
+    """In place: the layers `names` (keys of `LAYERS`) of `result`, in `LAYERS` order."""
     unknown = [n for n in names if n not in LAYERS]
     if unknown:
         raise ValueError(f"names: expected layers among {', '.join(LAYERS)}, got {unknown}")
-    out = _start(rgb)
+    require_rgb_image("out", out)
     for name, layer in LAYERS.items():
         if name in names:
-            out = layer(out, result)
+            layer(out, result)
+
+
+def draw_layers(rgb: RgbImage, result: FrameResult, names: Sequence[str]) -> RgbImage:
+    """The layers `names` of `result` (`put_layers`) on a copy of `rgb`."""
+    require_rgb_image("rgb", rgb)
+    out = rgb.copy()
+    put_layers(out, result, names)
     return out

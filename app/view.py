@@ -236,7 +236,8 @@ def camera_picture(
     rgb = draw.grey_to_rgb(frame.image)
     if state.layers.truth:
         rgb = draw.draw_truth(rgb, drive.truth(state.frame))
-    return overlays.draw_layers(rgb, result, overlay_names(state.layers))
+    overlays.put_layers(rgb, result, overlay_names(state.layers))
+    return rgb
 
 
 def side_by_side(a: draw.RgbImage, b: draw.RgbImage) -> draw.RgbImage:

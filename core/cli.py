@@ -701,10 +701,12 @@ def _cmd_export_scene(args: argparse.Namespace) -> int:
 def _cmd_export_video(args: argparse.Namespace) -> int:
     from app.video_export import ExportError, export_video, layers_named, summary_text, video_format
     from core.bench import one_thread
+    from core.malloc import keep_freed_memory
 
     def write(
         drive: Drive, clip: range, params: Params, params_b: Params | None, bar: ProgressBar
     ) -> str:
+        keep_freed_memory()  # a process of its own: its frames reuse the memory they free
         fmt = video_format(args.out, "OUT")
         if args.gif_width is not None and fmt != "gif":
             raise _UsageError(f"--gif-width: only for a .gif OUT, got {args.out}")

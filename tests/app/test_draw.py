@@ -35,6 +35,12 @@ def test_grey_to_rgb_copies_grey_into_three_channels() -> None:
         np.testing.assert_array_equal(rgb[:, :, c], grey)
 
 
+def test_grey_to_rgb_takes_views_and_empty_images() -> None:
+    grey = np.arange(100, dtype=np.uint8).reshape(10, 10)[::2, ::3]
+    np.testing.assert_array_equal(draw.grey_to_rgb(grey)[:, :, 1], grey)
+    assert draw.grey_to_rgb(np.zeros((0, 5), dtype=np.uint8)).shape == (0, 5, 3)
+
+
 def test_grey_to_rgb_rejects_colour_input() -> None:
     with pytest.raises(ValueError, match=r"image: expected an \(H, W\) uint8 grey image"):
         draw.grey_to_rgb(np.zeros((4, 4, 3), dtype=np.uint8))
@@ -95,7 +101,8 @@ def test_no_truth_gives_the_plain_image() -> None:
 def test_horizon_is_drawn_on_the_row_the_camera_model_gives() -> None:
     camera = fake_camera()
     row = round(camera.horizon_row_px())
-    out = draw.draw_horizon(black(), camera)
+    out = black()
+    draw.put_horizon(out, camera)
     assert all(tuple(out[row, col]) == draw.HORIZON_COLOUR for col in (0, 320, WIDTH_PX - 1))
     assert not out[row + 2].any()
 

@@ -4,6 +4,7 @@ and nothing else; empty results leave the picture; bad pictures are refused by n
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -24,6 +25,13 @@ BLACK = (0, 0, 0)
 
 def black() -> np.ndarray:
     return np.zeros((HEIGHT_PX, WIDTH_PX, 3), dtype=np.uint8)
+
+
+def drawn(put: Callable[..., None], rgb: np.ndarray, *args: object) -> np.ndarray:
+    """What the in-place drawing function `put` draws on a copy of `rgb`."""
+    out = rgb.copy()
+    put(out, *args)
+    return out
 
 
 def radar(x_m: float, y_m: float) -> RadarTarget:
@@ -140,7 +148,7 @@ def test_radar_cross_lands_where_the_camera_projects_in_its_verdict_colour(
 ) -> None:
     camera = fake_camera()
     ((u, v),) = camera.project(np.array([[25.0, -1.5, 0.0]]))[0]
-    out = overlays.draw_radar_targets(black(), [target_result(verdict)], camera)
+    out = drawn(overlays.put_radar_targets, black(), [target_result(verdict)], camera)
     row, col = round(v), round(u)
     arm = draw.RADAR_CROSS_SIZE_PX // 2 - 1
     for r, c in (
@@ -166,18 +174,19 @@ def test_radar_cross_lands_where_the_camera_projects_in_its_verdict_colour(
 
 def test_radar_target_behind_the_camera_or_none_draws_nothing() -> None:
     image = black()
-    out = overlays.draw_radar_targets(image, [target_result("vehicle", x_m=-10.0)], fake_camera())
+    out = drawn(
+        overlays.put_radar_targets, image, [target_result("vehicle", x_m=-10.0)], fake_camera()
+    )
     assert not out.any()
-    out = overlays.draw_radar_targets(image, [], fake_camera())
+    out = drawn(overlays.put_radar_targets, image, [], fake_camera())
     np.testing.assert_array_equal(out, image)
-    assert out is not image
 
 
 # --- search areas and vehicles --------------------------------------------------------------
 
 
 def test_search_area_draws_the_border_pixels_of_its_crop() -> None:
-    out = overlays.draw_search_areas(black(), [area((10, 20, 50, 40))])
+    out = drawn(overlays.put_search_areas, black(), [area((10, 20, 50, 40))])
     # the crop is image[20:40, 10:50]: its first and last rows and columns
     expected = ring(10, 20, 49, 39, 1)
     np.testing.assert_array_equal(is_colour(out, overlays.SEARCH_AREA_COLOUR), expected)
@@ -186,7 +195,7 @@ def test_search_area_draws_the_border_pixels_of_its_crop() -> None:
 
 def test_vehicle_box_draws_exactly_its_outline_in_the_vehicle_colour() -> None:
     # pixel edges 99.5 .. 180.5 and 199.5 .. 260.5: pixels 100 .. 180 and 200 .. 260
-    out = overlays.draw_vehicle_boxes(black(), [vehicle((99.5, 199.5, 180.5, 260.5))])
+    out = drawn(overlays.put_vehicle_boxes, black(), [vehicle((99.5, 199.5, 180.5, 260.5))])
     expected = ring(100, 200, 180, 260, overlays.BOX_THICKNESS_PX)
     np.testing.assert_array_equal(is_colour(out, overlays.VEHICLE_COLOUR), expected)
     assert not out[~expected].any()
@@ -201,7 +210,7 @@ def test_box_pixels_hold_the_edges_of_a_box() -> None:
 def test_box_dropped_by_the_size_filter_is_drawn_in_the_rejected_colour_with_a_tag() -> None:
     dropped = target_result("size_filter", box_px=(99.5, 199.5, 180.5, 260.5))
     merged = target_result("vehicle", box_px=(299.5, 199.5, 380.5, 260.5))
-    out = overlays.draw_vehicle_boxes(black(), [], [dropped, merged])
+    out = drawn(overlays.put_vehicle_boxes, black(), [], [dropped, merged])
     rejected = is_colour(out, overlays.VEHICLE_REJECTED_COLOUR)
     assert rejected[230, 100] and rejected[230, 180] and rejected[200, 140]
     assert rejected[185:199, 100:130].any()  # the "size" tag above the box
@@ -215,19 +224,24 @@ def test_box_dropped_by_the_size_filter_is_drawn_in_the_rejected_colour_with_a_t
 def test_followed_line_is_drawn_on_its_pixels_in_the_image() -> None:
     rail_area = area((100, 200, 160, 230), index=3)
     line = [(20, 2), (20, 3), (19, 4), (19, 5), (18, 6), (18, 7)]
-    out = overlays.draw_guard_rails(black(), [check(3, "guard_rail", line)], [rail_area])
+    out = drawn(overlays.put_guard_rails, black(), [check(3, "guard_rail", line)], [rail_area])
     rail = is_colour(out, overlays.GUARD_RAIL_LINE_COLOUR)
     for r, c in line:
         assert rail[200 + r, 100 + c]
     assert not out[:195].any() and not out[240:].any()
-    short = overlays.draw_guard_rails(black(), [check(3, "not_guard_rail", line)], [rail_area])
+    short = drawn(
+        overlays.put_guard_rails, black(), [check(3, "not_guard_rail", line)], [rail_area]
+    )
     assert is_colour(short, overlays.SHORT_LINE_COLOUR)[220, 102]
 
 
 def test_area_labelled_by_overlap_is_hatched_inside_its_crop_only() -> None:
     skipped = area((100, 200, 160, 230), index=4)
-    out = overlays.draw_guard_rails(
-        black(), [check(4, "overlap", overlapped_by=3)], [skipped, area((0, 0, 10, 10), 3)]
+    out = drawn(
+        overlays.put_guard_rails,
+        black(),
+        [check(4, "overlap", overlapped_by=3)],
+        [skipped, area((0, 0, 10, 10), 3)],
     )
     hatch = is_colour(out, overlays.OVERLAP_COLOUR)
     for row in hatch[200:230, 100:160]:  # every row crosses the lines HATCH_STEP_PX apart
@@ -238,25 +252,27 @@ def test_area_labelled_by_overlap_is_hatched_inside_its_crop_only() -> None:
 
 
 def test_no_checks_or_a_check_without_its_area_draw_nothing() -> None:
-    assert not overlays.draw_guard_rails(black(), [], []).any()
-    assert not overlays.draw_guard_rails(black(), [check(7, "guard_rail", [(1, 1)])], []).any()
+    assert not drawn(overlays.put_guard_rails, black(), [], []).any()
+    assert not drawn(
+        overlays.put_guard_rails, black(), [check(7, "guard_rail", [(1, 1)])], []
+    ).any()
 
 
 # --- pedestrians ----------------------------------------------------------------------------
 
 
 def test_pedestrian_strip_blends_grey_into_its_rows_only() -> None:
-    out = overlays.draw_pedestrian_strip(black(), (100, 300))
+    out = drawn(overlays.put_pedestrian_strip, black(), (100, 300))
     grey = round(overlays.STRIP_ALPHA * overlays.STRIP_GREY[0])
     assert (out[100:300] == grey).all()
     assert not out[:100].any() and not out[300:].any()
-    assert not overlays.draw_pedestrian_strip(black(), (100, 100)).any()
+    assert not drawn(overlays.put_pedestrian_strip, black(), (100, 100)).any()
 
 
 def test_kept_pedestrian_box_draws_exactly_its_outline_in_bright_green() -> None:
     # columns 100 .. 109 and rows 200 .. 239, ends exclusive
-    out = overlays.draw_pedestrians(
-        black(), [pedestrian((100.0, 200.0, 110.0, 240.0), "pedestrian")]
+    out = drawn(
+        overlays.put_pedestrians, black(), [pedestrian((100.0, 200.0, 110.0, 240.0), "pedestrian")]
     )
     expected = ring(100, 200, 109, 239, overlays.BOX_THICKNESS_PX)
     np.testing.assert_array_equal(is_colour(out, overlays.PEDESTRIAN_COLOUR), expected)
@@ -265,7 +281,7 @@ def test_kept_pedestrian_box_draws_exactly_its_outline_in_bright_green() -> None
 
 def test_rejected_pedestrian_is_dark_green_with_its_reason_above() -> None:
     box = (100.0, 200.0, 110.0, 240.0)
-    out = overlays.draw_pedestrians(black(), [pedestrian(box, "motion_stereo")])
+    out = drawn(overlays.put_pedestrians, black(), [pedestrian(box, "motion_stereo")])
     dark = is_colour(out, overlays.PEDESTRIAN_REJECTED_COLOUR)
     assert dark[220, 100] and dark[220, 109] and dark[239, 105]
     assert not dark[220, 101]  # one pixel thick
@@ -275,8 +291,8 @@ def test_rejected_pedestrian_is_dark_green_with_its_reason_above() -> None:
 
 def test_pedestrians_of_other_verdicts_are_left_out_when_asked() -> None:
     candidates = [pedestrian((100.0, 200.0, 110.0, 240.0), "size")]
-    assert overlays.draw_pedestrians(black(), candidates).any()
-    assert not overlays.draw_pedestrians(black(), candidates, overlays.FUSION_VERDICTS).any()
+    assert drawn(overlays.put_pedestrians, black(), candidates).any()
+    assert not drawn(overlays.put_pedestrians, black(), candidates, overlays.FUSION_VERDICTS).any()
 
 
 # --- pitch ----------------------------------------------------------------------------------
@@ -295,7 +311,7 @@ def test_pitch_draws_the_horizon_the_lines_and_both_vanishing_points() -> None:
         calibrated_vp_px=np.array([300.0, 240.0]),
         vanishing_point_px=np.array([320.0, 250.0]),
     )
-    out = overlays.draw_pitch(black(), pitch, camera)
+    out = drawn(overlays.put_pitch, black(), pitch, camera)
     assert tuple(out[round(camera.horizon_row_px(0.0)), 0]) == draw.HORIZON_COLOUR
     hint = is_colour(out, overlays.LINE_HINT_COLOUR)
     for v in (400, 350, 300, 270):  # up to the vanishing point's row
@@ -336,7 +352,8 @@ def track(kind: str, box_px, misses: int = 0, id_: int = 7) -> Track:
 
 
 def test_track_id_is_tagged_under_its_box_in_the_colour_of_its_kind() -> None:
-    out = overlays.draw_track_ids(
+    out = drawn(
+        overlays.put_track_ids,
         black(),
         [
             track("vehicle", (100.0, 200.0, 180.0, 260.0)),
@@ -350,7 +367,7 @@ def test_track_id_is_tagged_under_its_box_in_the_colour_of_its_kind() -> None:
 
 def test_tags_of_tracks_in_the_same_place_go_one_under_the_other() -> None:
     box = (100.0, 200.0, 180.0, 260.0)
-    out = overlays.draw_track_ids(black(), [track("vehicle", box), track("pedestrian", box)])
+    out = drawn(overlays.put_track_ids, black(), [track("vehicle", box), track("pedestrian", box)])
     vehicle_rows = np.flatnonzero(is_colour(out, overlays.VEHICLE_COLOUR).any(axis=1))
     pedestrian_rows = np.flatnonzero(is_colour(out, overlays.PEDESTRIAN_COLOUR).any(axis=1))
     assert vehicle_rows.size and pedestrian_rows.size
@@ -358,23 +375,24 @@ def test_tags_of_tracks_in_the_same_place_go_one_under_the_other() -> None:
 
 
 def test_guard_rail_tracks_get_no_tag() -> None:
-    assert not overlays.draw_track_ids(black(), [track("guard_rail", (1.0, 2.0, 30.0, 40.0))]).any()
+    assert not drawn(
+        overlays.put_track_ids, black(), [track("guard_rail", (1.0, 2.0, 30.0, 40.0))]
+    ).any()
 
 
 # --- all layers of an engine frame, bad inputs ---------------------------------------------
 
 
-def test_every_layer_of_an_engine_frame_draws_on_a_copy() -> None:
+def test_every_layer_of_an_engine_frame_draws_something_and_draw_layers_on_a_copy() -> None:
     result = engine_result()
     rgb = draw.grey_to_rgb(engine_image())
     before = rgb.copy()
     for name, layer in overlays.LAYERS.items():
-        out = layer(rgb, result)
-        assert out.shape == rgb.shape and out.dtype == np.uint8, name
+        out = drawn(layer, rgb, result)
         assert (out != rgb).any(), name  # the highway frame has something for every layer
-    np.testing.assert_array_equal(rgb, before)
     everything = overlays.draw_layers(rgb, result, list(overlays.LAYERS))
-    assert everything.shape == rgb.shape
+    np.testing.assert_array_equal(rgb, before)
+    assert everything.shape == rgb.shape and (everything != rgb).any()
 
 
 def test_what_was_found_and_what_was_rejected_are_separate_layers() -> None:
@@ -407,15 +425,15 @@ def test_draw_layers_refuses_an_unknown_layer() -> None:
 )
 def test_overlays_refuse_a_picture_that_is_not_rgb(bad: object) -> None:
     calls = [
-        lambda: overlays.draw_radar_targets(bad, [], fake_camera()),  # type: ignore[arg-type]
-        lambda: overlays.draw_search_areas(bad, []),  # type: ignore[arg-type]
-        lambda: overlays.draw_vehicle_boxes(bad, []),  # type: ignore[arg-type]
-        lambda: overlays.draw_guard_rails(bad, [], []),  # type: ignore[arg-type]
-        lambda: overlays.draw_pedestrian_strip(bad, (0, 1)),  # type: ignore[arg-type]
-        lambda: overlays.draw_pedestrians(bad, []),  # type: ignore[arg-type]
-        lambda: overlays.draw_pitch(bad, engine_result().pitch, fake_camera()),  # type: ignore[arg-type]
-        lambda: overlays.draw_track_ids(bad, []),  # type: ignore[arg-type]
+        lambda: overlays.put_radar_targets(bad, [], fake_camera()),  # type: ignore[arg-type]
+        lambda: overlays.put_search_areas(bad, []),  # type: ignore[arg-type]
+        lambda: overlays.put_vehicle_boxes(bad, []),  # type: ignore[arg-type]
+        lambda: overlays.put_guard_rails(bad, [], []),  # type: ignore[arg-type]
+        lambda: overlays.put_pedestrian_strip(bad, (0, 1)),  # type: ignore[arg-type]
+        lambda: overlays.put_pedestrians(bad, []),  # type: ignore[arg-type]
+        lambda: overlays.put_pitch(bad, engine_result().pitch, fake_camera()),  # type: ignore[arg-type]
+        lambda: overlays.put_track_ids(bad, []),  # type: ignore[arg-type]
     ]
     for call in calls:
-        with pytest.raises(ValueError, match=r"rgb: expected an \(H, W, 3\) uint8 RGB image"):
+        with pytest.raises(ValueError, match=r"out: expected an \(H, W, 3\) uint8 RGB image"):
             call()
