@@ -1,4 +1,4 @@
-"""Overlays of one engine frame on the camera picture: one pure function per layer.
+"""Overlays of one engine frame on the camera picture: one drawing function per layer.
 
 Each `put_*` function draws one layer in place on an RGB picture of the full camera frame,
 from parts of a `core.engine.FrameResult`, so the inspector can toggle layers by choosing
