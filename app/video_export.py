@@ -47,7 +47,6 @@ from av.video.reformatter import ColorPrimaries, ColorRange, ColorTrc
 from PIL import Image
 
 from app import draw
-from app.engines import FrameCache
 from app.state import DEMO_LAYERS, Layers
 from app.video_frame import video_frame
 from app.view import AB_GAP_PX, FrameSource, check_clip
@@ -137,8 +136,7 @@ def summary_text(summary: ExportSummary) -> str:
 def video_format(out_path: Path, name: str = "out_path") -> str:
     """The container of `out_path` by its suffix ("mp4" or "gif"). ValueError naming `name`
     when the suffix is another, `out_path` is a folder, or its folder does not exist."""
-    fmt = VIDEO_FORMATS[output_suffix(name, out_path, VIDEO_FORMATS)]
-    return fmt
+    return VIDEO_FORMATS[output_suffix(name, out_path, VIDEO_FORMATS)]
 
 
 def layers_named(names: str) -> Layers:
@@ -319,15 +317,14 @@ def export_video(
     layers = DEMO_LAYERS if layers is None else layers
     sets = [Params() if params is None else params] + ([] if params_b is None else [params_b])
     hashes = [params_hash(p) for p in sets]
-    frames = FrameCache(drive)
     engines = [FusionEngine(p, drive.camera) for p in sets]
     width_px = None
     if fmt == "gif":
         width_px = gif_width_px or gif_default_width_px(drive.camera.intrinsics.width_px, len(sets))
 
     def picture(index: int) -> draw.RgbImage:
-        results = [engine.seek(frames, index) for engine in engines]
-        rgb = video_frame(drive, layers, frames.frame(index), results, hashes, width_px)
+        results = [engine.seek(drive, index) for engine in engines]  # the drive caches frames
+        rgb = video_frame(drive, layers, drive.frame(index), results, hashes, width_px)
         return _even(rgb) if fmt == "mp4" else rgb
 
     partial = partial_path(out_path)

@@ -15,7 +15,6 @@ it. Elsewhere than glibc (macOS, musl) nothing changes.
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
 
 # glibc's malloc.h
 M_TRIM_THRESHOLD = -1
@@ -28,12 +27,9 @@ TRIM_THRESHOLD_BYTES = 128 << 20
 def keep_freed_memory() -> bool:
     """Raise glibc's mmap and trim thresholds for this process (module docstring). Returns
     whether it could: False where the C library is not glibc."""
-    name = ctypes.util.find_library("c")
-    if name is None:
-        return False
     try:
-        mallopt = ctypes.CDLL(name).mallopt
-    except (OSError, AttributeError):  # no such library, or not glibc
+        mallopt = ctypes.CDLL(None).mallopt  # the C library this process runs on
+    except (OSError, AttributeError):  # not glibc
         return False
     mallopt.argtypes = [ctypes.c_int, ctypes.c_int]
     mallopt.restype = ctypes.c_int
