@@ -15,7 +15,6 @@ from dataclasses import dataclass
 from typing import Literal
 
 import cv2
-import numpy as np
 
 from app import draw, overlays
 from app.state import Layers
@@ -128,7 +127,7 @@ def _draw_mark(out: draw.RgbImage, item: LegendItem, x: int, top: int) -> None:
 
 def banner_strip(height_px: int, width_px: int) -> draw.RgbImage:
     """An empty (height_px, width_px, 3) strip of the banner's colour."""
-    return np.full((height_px, width_px, 3), BANNER_COLOUR, dtype=np.uint8)
+    return draw.filled(height_px, width_px, BANNER_COLOUR)
 
 
 @functools.lru_cache(maxsize=8)

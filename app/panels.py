@@ -28,6 +28,7 @@ from app.draw import (
     Rgb,
     RgbImage,
     add_caption,
+    filled,
     grey_to_rgb,
     require_rgb_image,
 )
@@ -84,7 +85,7 @@ def empty_panel(text: str, size_hw_px: tuple[int, int] = EMPTY_PANEL_HW_PX) -> R
     `EMPTY_TEXT_COLOUR`: what a panel shows when it has nothing to show."""
     _require_size("size_hw_px", size_hw_px)
     h, w = size_hw_px
-    out = np.full((h, w, 3), BACKGROUND_COLOUR, dtype=np.uint8)
+    out = filled(h, w, BACKGROUND_COLOUR)
     (text_w, text_h), _ = cv2.getTextSize(text, FONT, FONT_SCALE, 1)
     org = (max((w - text_w) // 2, 0), (h + text_h) // 2)
     cv2.putText(out, text, org, FONT, FONT_SCALE, EMPTY_TEXT_COLOUR, 1, cv2.LINE_AA)
@@ -110,8 +111,8 @@ def fit_tile(rgb: RgbImage, tile_hw_px: tuple[int, int]) -> RgbImage:
         img = np.asarray(cv2.resize(rgb, size, interpolation=cv2.INTER_AREA), dtype=np.uint8)
     else:
         s = whole_scale((h, w), tile_hw_px)
-        img = np.repeat(np.repeat(rgb, s, axis=0), s, axis=1)
-    out = np.full((th, tw, 3), BACKGROUND_COLOUR, dtype=np.uint8)
+        img = rgb if s == 1 else np.repeat(np.repeat(rgb, s, axis=0), s, axis=1)
+    out = filled(th, tw, BACKGROUND_COLOUR)
     r0, c0 = (th - img.shape[0]) // 2, (tw - img.shape[1]) // 2
     out[r0 : r0 + img.shape[0], c0 : c0 + img.shape[1]] = img
     return out
@@ -136,10 +137,10 @@ def contact_sheet(tiles: Sequence[RgbImage], columns: int = SHEET_COLUMNS) -> Rg
     h, w = tiles[0].shape[:2]
     cols = min(columns, len(tiles))
     rows = math.ceil(len(tiles) / cols)
-    out = np.full(
-        (rows * h + (rows - 1) * SEPARATOR_PX, cols * w + (cols - 1) * SEPARATOR_PX, 3),
+    out = filled(
+        rows * h + (rows - 1) * SEPARATOR_PX,
+        cols * w + (cols - 1) * SEPARATOR_PX,
         BACKGROUND_COLOUR,
-        dtype=np.uint8,
     )
     for k, tile in enumerate(tiles):
         r, c = divmod(k, cols)
@@ -182,7 +183,7 @@ def motion_stereo_panel(
     mask_h, mask_w = ms.image_mask.shape[:2]
     mask_tile_hw = (max(1, round(mask_h * width / mask_w)), width)
     mask = _captioned_tile(grey_to_rgb(ms.image_mask), "D in the image", mask_tile_hw)
-    gap = np.full((SEPARATOR_PX, width, 3), BACKGROUND_COLOUR, dtype=np.uint8)
+    gap = filled(SEPARATOR_PX, width, BACKGROUND_COLOUR)
     return add_caption(np.vstack([row, gap, mask]), f"motion stereo: {ms.mode}")
 
 
@@ -223,7 +224,7 @@ def symmetry_tile(
     chi_rgb = chi_to_rgb(target.symmetry, target.threshold)
     matrix[:, :n_axes] = np.repeat(chi_rgb, MATRIX_ROW_PX, axis=0)
     patch = np.repeat(grey_to_rgb(area.patch), 2, axis=1)
-    sep = np.full((SEPARATOR_PX, 2 * w, 3), SEPARATOR_COLOUR, dtype=np.uint8)
+    sep = filled(SEPARATOR_PX, 2 * w, SEPARATOR_COLOUR)
     stack = np.concatenate([patch, sep, matrix])
     s = whole_scale(stack.shape[:2], tile_hw_px)
     out = np.repeat(np.repeat(stack, s, axis=0), s, axis=1)
@@ -308,7 +309,7 @@ def pedestrian_symmetry_panel(
             "no pedestrian band in the image", (plot_height_px + STRIP_HEIGHT_PX, 640)
         )
     n_bands, width = score.shape
-    plot = np.full((plot_height_px, width, 3), BACKGROUND_COLOUR, dtype=np.uint8)
+    plot = filled(plot_height_px, width, BACKGROUND_COLOUR)
     profile = score.max(axis=0)
     ys = np.array([_score_row(float(p), plot_height_px) for p in profile], dtype=np.int32)
     for col in range(width):
@@ -323,7 +324,7 @@ def pedestrian_symmetry_panel(
     levels = np.round(np.clip(score[::-1], 0.0, 1.0) * 255).astype(np.uint8)
     bands = cv2.cvtColor(cv2.applyColorMap(levels, cv2.COLORMAP_VIRIDIS), cv2.COLOR_BGR2RGB)
     bands = np.repeat(np.asarray(bands, dtype=np.uint8), band_row_px, axis=0)
-    sep = np.full((SEPARATOR_PX, width, 3), SEPARATOR_COLOUR, dtype=np.uint8)
+    sep = filled(SEPARATOR_PX, width, SEPARATOR_COLOUR)
     out = np.concatenate([plot, sep, bands])
     bands_top = plot_height_px + SEPARATOR_PX
     ordered = sorted(pedestrian.candidates, key=lambda c: c.verdict == "pedestrian")
@@ -378,7 +379,7 @@ def guard_rail_tile(
         return _captioned_tile(_hatched(patch, OVERLAP_COLOUR), caption, tile_hw_px)
     edges = check.edges
     h, w = edges.shape
-    sep = np.full((h, SEPARATOR_PX, 3), SEPARATOR_COLOUR, dtype=np.uint8)
+    sep = filled(h, SEPARATOR_PX, SEPARATOR_COLOUR)
     edge_rgb = np.where(edges[:, :, None] > 0, np.uint8(EDGE_GREY), np.uint8(0))
     edge_rgb = np.repeat(edge_rgb, 3, axis=2).astype(np.uint8)
     both = np.concatenate([patch, sep, edge_rgb], axis=1)

@@ -256,7 +256,7 @@ def _even(rgb: draw.RgbImage) -> draw.RgbImage:
     if h % 2 == 0 and w % 2 == 0:
         return rgb
     out = np.empty((h + h % 2, w + w % 2, 3), dtype=np.uint8)
-    out[:] = draw.STRIP_COLOUR
+    draw.fill(out, draw.STRIP_COLOUR)
     out[:h, :w] = rgb
     return out
 

@@ -242,7 +242,7 @@ def camera_picture(
 
 def side_by_side(a: draw.RgbImage, b: draw.RgbImage) -> draw.RgbImage:
     """`a`, a white gap of AB_GAP_PX and `b`, left to right (both of one height)."""
-    gap = np.full((a.shape[0], AB_GAP_PX, 3), AB_GAP_COLOUR, dtype=np.uint8)
+    gap = draw.filled(a.shape[0], AB_GAP_PX, AB_GAP_COLOUR)
     return np.ascontiguousarray(np.hstack([a, gap, b]))
 
 

@@ -46,6 +46,23 @@ def test_grey_to_rgb_rejects_colour_input() -> None:
         draw.grey_to_rgb(np.zeros((4, 4, 3), dtype=np.uint8))
 
 
+def test_filled_is_every_pixel_of_the_colour() -> None:
+    out = draw.filled(5, 7, (10, 20, 30))
+    assert out.shape == (5, 7, 3) and out.dtype == np.uint8
+    assert (out.reshape(-1, 3) == (10, 20, 30)).all()
+    assert draw.filled(0, 7, (1, 2, 3)).shape == (0, 7, 3)
+    assert draw.filled(3, 0, (1, 2, 3)).shape == (3, 0, 3)
+
+
+def test_fill_paints_a_view_and_nothing_around_it() -> None:
+    out = np.zeros((6, 8, 3), dtype=np.uint8)
+    draw.fill(out[2:4, 1:5], (200, 100, 50))
+    inside = np.zeros((6, 8), dtype=bool)
+    inside[2:4, 1:5] = True
+    assert (out[inside] == (200, 100, 50)).all()
+    assert (out[~inside] == 0).all()
+
+
 def test_radar_cross_is_centred_where_the_camera_projects_the_target() -> None:
     camera = fake_camera()
     uv_px, in_front = camera.project(np.array([[25.0, -1.5, 0.0]]))
