@@ -44,6 +44,10 @@ log = logging.getLogger(__name__)
 DriveOpener = Callable[[Path], FrameSource]
 Session = ClientSession | PresenterSession
 PARAMETER_SETS = ("A", "B")  # a client's engines are keyed (client id, set)
+# a preview's exact replay waits this long for the values to rest: while a slider moves
+# (up to 20 changes a second) every change is previewed, and no replay holds one up or
+# competes with the page decoding it
+EXACT_AFTER_S = 0.15
 
 
 def open_drive(path: Path) -> FrameSource:
@@ -318,7 +322,9 @@ class InspectorServer:
             def again(view: FrameView | Exception) -> bool:
                 return isinstance(view, FrameView) and view.preview
 
-            worker = RenderWorker(render, publish, name=f"render-{name}", again=again)
+            worker = RenderWorker(
+                render, publish, name=f"render-{name}", again=again, again_after_s=EXACT_AFTER_S
+            )
             annotations = _open_annotations(drive.path)
             evaluate = None
             editable = annotations is not None and annotations.read_only_reason is None

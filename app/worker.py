@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 from collections.abc import Callable, Hashable
 from typing import Generic, TypeVar
 
@@ -22,9 +23,9 @@ log = logging.getLogger(__name__)
 
 class RenderWorker(Generic[Key, Request, Result]):
     """Runs `render(key, request)` on a background thread, then `publish(key, request,
-    result)`; when `again(result)` says so, the same request is rendered once more after
-    the others waiting (a preview followed by the exact result), unless a newer request for
-    its key came meanwhile.
+    result)`; when `again(result)` says so, the same request is rendered once more, after
+    the others waiting and no sooner than `again_after_s` (a preview followed by the exact
+    result once the values rest), unless a newer request for its key came meanwhile.
 
     `submit(key, request)` never blocks; of the requests submitted for one key while the
     worker is busy only the last is rendered. Keys (clients) are served in the order their
@@ -38,11 +39,14 @@ class RenderWorker(Generic[Key, Request, Result]):
         publish: Callable[[Key, Request, Result], None],
         name: str = "render-worker",
         again: Callable[[Result], bool] = lambda result: False,
+        again_after_s: float = 0.0,
     ) -> None:
         self._render = render
         self._publish = publish
         self._again = again
-        self._pending: dict[Key, Request] = {}
+        self._again_after_s = again_after_s
+        # key -> (request, monotonic time it may start); in the order the keys came
+        self._pending: dict[Key, tuple[Request, float]] = {}
         self._wake = threading.Condition()
         self._stopping = False
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
@@ -51,7 +55,7 @@ class RenderWorker(Generic[Key, Request, Result]):
     def submit(self, key: Key, request: Request) -> None:
         """Queue `request` for `key`, replacing any request for `key` not yet started."""
         with self._wake:
-            self._pending[key] = request
+            self._pending[key] = (request, 0.0)
             self._wake.notify()
 
     def forget(self, key: Key) -> None:
@@ -68,13 +72,17 @@ class RenderWorker(Generic[Key, Request, Result]):
         self._thread.join(timeout_s)
 
     def _next(self) -> tuple[Key, Request] | None:
+        """The first request due, waiting for one; None when stopping."""
         with self._wake:
-            while not self._pending and not self._stopping:
-                self._wake.wait()
-            if self._stopping:
-                return None
-            key = next(iter(self._pending))
-            return key, self._pending.pop(key)
+            while not self._stopping:
+                now = time.monotonic()
+                due = [k for k, (_, at) in self._pending.items() if at <= now]
+                if due:
+                    request, _ = self._pending.pop(due[0])
+                    return due[0], request
+                soonest = min((at for _, at in self._pending.values()), default=None)
+                self._wake.wait(None if soonest is None else soonest - now)
+            return None
 
     def _run(self) -> None:
         while (job := self._next()) is not None:
@@ -84,6 +92,7 @@ class RenderWorker(Generic[Key, Request, Result]):
                 self._publish(key, request, result)
                 if self._again(result):
                     with self._wake:
-                        self._pending.setdefault(key, request)
+                        at = time.monotonic() + self._again_after_s
+                        self._pending.setdefault(key, (request, at))
             except Exception:  # a bad frame must not end the worker
                 log.exception("render of %r for %r failed", request, key)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+import time
 
 from app.worker import RenderWorker
 
@@ -126,5 +127,37 @@ def test_forgotten_client_is_not_rendered() -> None:
         assert rec.done.acquire(timeout=5.0)
         assert not rec.done.acquire(timeout=0.3)
         assert rec.rendered == [0]
+    finally:
+        worker.stop()
+
+
+def test_asking_again_waits_and_a_newer_request_meanwhile_goes_first() -> None:
+    rendered: list[tuple[int, str]] = []
+    times: list[float] = []
+    done = threading.Semaphore(0)
+
+    def render(key: str, request: int) -> str:
+        """A preview the first time a request renders, then the exact result."""
+        kind = "exact" if (request, "preview") in rendered else "preview"
+        rendered.append((request, kind))
+        return kind
+
+    def publish(key: str, request: int, result: str) -> None:
+        times.append(time.monotonic())
+        done.release()
+
+    worker = RenderWorker(render, publish, again=lambda kind: kind == "preview", again_after_s=0.3)
+    try:
+        worker.submit("tab", 1)
+        assert done.acquire(timeout=5.0) and done.acquire(timeout=5.0)
+        assert rendered == [(1, "preview"), (1, "exact")]
+        assert times[1] - times[0] >= 0.3  # the exact render waited
+        worker.submit("tab", 2)
+        assert done.acquire(timeout=5.0)
+        worker.submit("tab", 3)  # within the wait: at once, and 2's exact render is dropped
+        assert done.acquire(timeout=0.25)
+        assert done.acquire(timeout=5.0)
+        assert rendered[2:] == [(2, "preview"), (3, "preview"), (3, "exact")]
+        assert not done.acquire(timeout=0.5)
     finally:
         worker.stop()
