@@ -132,6 +132,13 @@ def test_two_tabs_editing_one_box_the_second_is_refused(cars: Path, browser: Bro
         second.goto(f"http://127.0.0.1:{server.port}/")
         annotate(first)
         annotate(second)
+        # the second tab's frame rendered for annotation has reached it: a render arriving
+        # after the first tab's edit would show the second tab that edit, and its drag would
+        # rightly not be refused (a seek away and back renders the frame again)
+        for seconds, frame in (("0.04", 1), ("0", 0)):  # 25 frames/s
+            set_field(second, "go to time s", seconds)
+            second.get_by_text(f"frame {frame} /").wait_for(timeout=TIMEOUT_MS)
+        second.wait_for_timeout(SETTLE_MS)
         drag(first)  # draws a box (or moves the one the test before left there)
         after_first = saved(cars)
         # the second tab still shows the box as it was: its drag moves that, and is refused
