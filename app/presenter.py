@@ -27,7 +27,7 @@ from app.state import DEMO_LAYERS, Panels, ViewState
 from app.view import FrameView
 from app.view_link import Clip, ViewLink
 
-PRESENTER_CAMERA_WIDTH_PX = 900
+PRESENTER_CAMERA_WIDTH_PX = 780  # the 3D view beside it as wide as in the inspector
 PICTURE_WIDTH_PX = PRESENTER_CAMERA_WIDTH_PX - 40  # the panel's margins and scroll bar
 LEGEND_WIDTH_PX = 320  # the left panel's
 PRESENTER_PANELS = Panels(bird_eye=True, can=False, stage="none")
