@@ -76,10 +76,10 @@ class RenderWorker(Generic[Key, Request, Result]):
         with self._wake:
             while not self._stopping:
                 now = time.monotonic()
-                due = [k for k, (_, at) in self._pending.items() if at <= now]
-                if due:
-                    request, _ = self._pending.pop(due[0])
-                    return due[0], request
+                for key, (request, at) in self._pending.items():
+                    if at <= now:
+                        del self._pending[key]
+                        return key, request
                 soonest = min((at for _, at in self._pending.values()), default=None)
                 self._wake.wait(None if soonest is None else soonest - now)
             return None
