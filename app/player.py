@@ -1,8 +1,11 @@
-"""A tab's playback clock: a thread that steps the playhead once per period until stopped."""
+"""A tab's playback clock: a thread that steps the playhead once per period until stopped;
+and a pacer, for what follows the playhead less often than it moves."""
 
 from __future__ import annotations
 
+import math
 import threading
+import time
 from collections.abc import Callable
 
 
@@ -39,3 +42,19 @@ class Player:
             if not step():
                 stop.set()
                 return
+
+
+class Pacer:
+    """Says yes at most once every `period_s` seconds (of `time.monotonic`)."""
+
+    def __init__(self, period_s: float) -> None:
+        self.period_s = period_s
+        self._last_s = -math.inf
+
+    def due(self) -> bool:
+        """Whether `period_s` has passed since the last yes (and if so, a yes now)."""
+        now_s = time.monotonic()
+        if now_s - self._last_s < self.period_s:
+            return False
+        self._last_s = now_s
+        return True

@@ -27,7 +27,7 @@ from app.metrics_panel import Evaluate, MetricsPanel
 from app.page_url import copy_page_url, read_page, show_query
 from app.param_sets import ParamSets, Sets
 from app.params_panel import NoticeColour, ParamsPanel
-from app.player import Player
+from app.player import Pacer, Player
 from app.presets import PresetStore
 from app.state import Layers, Panels, ViewState
 from app.view import (
@@ -57,6 +57,11 @@ CAMERA_ORDER, DIFF_ORDER, STAGE_CHOICE_ORDER, STAGE_ORDER, CAN_ORDER = range(5)
 ANNOTATION_ORDER = 6.5  # the Annotation folder: after Metrics (6), before Keys (7)
 DEMO_ORDER = 2.5  # the Share and demo folder: under the Timeline (2)
 TIMINGS_WINDOW = 50  # frames in the running median of the stage timings
+# While playing, the frame slider, the read-out and the CAN plot follow the playhead at most
+# this often: every update re-renders them in the page, which at 40 frames/s kept the page
+# from decoding the pictures (the camera picture's caption carries the read-out of its own
+# frame). They show the playhead exactly again when playback stops.
+PLAYHEAD_PERIOD_S = 0.2
 NOTICE_SECONDS = 8.0
 # (recording, kind, clip, state, progress) -> (file name, bytes): `app.clip_export.export_clip`
 Exporter = Callable[[str, str, Clip, ViewState, Callable[[int, int], None]], tuple[str, bytes]]
@@ -105,6 +110,8 @@ class ClientSession:
         self._clip: Clip | None = None  # None: the whole drive
         self._shown_query = ""  # the page URL's query, as last set
         self._can: CanSeries | None = None
+        self._slider_pace = Pacer(PLAYHEAD_PERIOD_S)
+        self._readout_pace = Pacer(PLAYHEAD_PERIOD_S)  # the read-out and the CAN plot
         self._recent_timings: deque[StageTimings] = deque(maxlen=TIMINGS_WINDOW)
         self._history = History()  # parameter changes and annotation edits, one stack
         self._param_sets = ParamSets(presets, self._history, self._set_params)
@@ -393,12 +400,15 @@ class ClientSession:
                     self._diff = gui.add_markdown("", order=DIFF_ORDER)
             else:
                 self._image.image = view.image
-            if self._diff is not None:
+            if self._diff is not None and self._diff.content != view.diff:
                 self._diff.content = view.diff
-            self._show_can(view.frame)
+            readout = self._due(self._readout_pace)
+            if readout:
+                self._show_can(view.frame)
             self._show_stage(view)
             self._bird_eyes.show(view.bird_eyes, self._state.params)
-            self._readout.content = f"`{view.readout}`"
+            if readout:
+                self._readout.content = f"`{view.readout}`"
         if view.annotation is not None:
             self._annotation.show_frame(view.frame, *view.annotation)
 
@@ -478,7 +488,7 @@ class ClientSession:
             if frame == self._state.frame:
                 return
             self._state = replace(self._state, frame=frame)
-        if self._slider is not None:
+        if self._slider is not None and self._due(self._slider_pace):
             self._slider.value = frame  # type: ignore[misc]  # mypy: asymmetric viser property
         self._submit()
 
@@ -501,7 +511,7 @@ class ClientSession:
             self._play.label = "Pause" if playing else "Play"
             self._play.icon = viser.Icon.PLAYER_PAUSE if playing else viser.Icon.PLAYER_PLAY
         if not playing:
-            self._show_link()  # where playback stopped
+            self._show_playhead()  # and the link to where playback stopped
 
     def notify(self, title: str, message: str, color: NoticeColour = "red") -> None:
         """A notification in this tab's page (a refused value, a saved preset)."""
@@ -512,6 +522,18 @@ class ClientSession:
         self._player.stop()
 
     # --- internals ---------------------------------------------------------------------
+    def _due(self, pace: Pacer) -> bool:
+        """Whether to update a playhead indicator now: always unless playing."""
+        return not self._state.playing or pace.due()
+
+    def _show_playhead(self) -> None:
+        """The frame slider at the playhead, and the frame rendered again for the read-out
+        and the CAN plot (after playback)."""
+        frame = self._state.frame
+        if self._slider is not None and self._slider.value != frame:
+            self._slider.value = frame  # type: ignore[misc]  # mypy: asymmetric viser property
+        self._submit()
+
     def _frame_period_s(self) -> float:
         """Between two frames at the chosen rate of the drive's frame rate."""
         rate = self._rate

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 from app_fakes import FakeDrive, Recordings
-from browser_page import CAMERA_IMG, SETTLE_MS, TIMEOUT_MS, camera_src, serving
+from browser_page import CAMERA_IMG, SETTLE_MS, TIMEOUT_MS, camera_src, field, serving
 from playwright.sync_api import Page
 
 from core.io import Drive, FrameInput
@@ -52,6 +52,8 @@ def test_play_runs_to_the_end_and_pause_stops(recordings: Recordings, page: Page
         page.wait_for_timeout(500)
         assert readout.inner_text() == paused_at
         assert not paused_at.startswith(f"frame {last} /")
+        # while playing, the slider followed at most 5 times a second; paused, it is exact
+        assert paused_at.startswith(f"frame {field(page, 'frame').input_value()} /")
 
 
 def test_recording_that_cannot_open_shows_a_message(tmp_path: Path, page: Page) -> None:

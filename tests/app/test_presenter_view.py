@@ -7,11 +7,12 @@ import dataclasses
 import threading
 
 import numpy as np
+import pytest
 from engine_frames import engine_result
 
 from app.draw import scaled_to_width
 from app.legend import legend_items
-from app.player import Player
+from app.player import Pacer, Player
 from app.presenter_view import (
     HeadlineFigures,
     figures_markdown,
@@ -77,3 +78,15 @@ def test_the_player_steps_until_a_step_says_no_more_and_stops_on_request() -> No
     assert again.wait(5.0) and player.playing
     player.stop()
     assert not player.playing
+
+
+def test_the_pacer_says_yes_at_most_once_a_period(monkeypatch: pytest.MonkeyPatch) -> None:
+    now_s = [100.0]
+    monkeypatch.setattr("app.player.time.monotonic", lambda: now_s[0])
+    pace = Pacer(0.2)
+    answers = []
+    for t_s in (100.0, 100.1, 100.19, 100.2, 100.35, 100.41, 105.0):
+        now_s[0] = t_s
+        answers.append(pace.due())
+    # yes at 100.0; then 0.2 s after each yes: 100.2 and 100.41 (100.35 is 0.15 s after 100.2)
+    assert answers == [True, False, False, True, False, True, True]
