@@ -175,6 +175,7 @@ class ClientSession:
         self._image: viser.GuiImageHandle | None = None
         self._diff: viser.GuiMarkdownHandle | None = None
         self._can_plot: viser.GuiUplotHandle | None = None
+        self._can_frame = -1  # the frame the CAN plot is around
         self._timings: viser.GuiMarkdownHandle | None = None
         self._stage_image: viser.GuiImageHandle | None = None
         self._metrics: MetricsPanel | None = None
@@ -413,12 +414,16 @@ class ClientSession:
             self._annotation.show_frame(view.frame, *view.annotation)
 
     def _show_can(self, frame: int) -> None:
-        """The CAN plot around `frame` (removed when switched off; none without CAN)."""
+        """The CAN plot around `frame` (removed when switched off; none without CAN; not sent
+        again for the frame it shows, as after a parameter change)."""
         if not self._state.panels.can or self._can is None:
             if self._can_plot is not None:
                 self._can_plot.remove()
                 self._can_plot = None
             return
+        if self._can_plot is not None and frame == self._can_frame:
+            return
+        self._can_frame = frame
         data = can_window(self._can, frame)
         if self._can_plot is not None:
             self._can_plot.data = data
