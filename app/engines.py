@@ -10,45 +10,19 @@ from another thread (a client leaving).
 from __future__ import annotations
 
 import threading
-from collections import OrderedDict
 from collections.abc import Hashable
 from dataclasses import dataclass
 
 from core.camera import CameraModel
 from core.engine import EngineState, FrameResult, Frames, FusionEngine
-from core.io.frame import FrameInput
 from core.params import Params
 
-CACHED_FRAMES = 64  # decoded frames kept per drive: a replay window and a scrub around it
 # States kept per engine, so that a scrub back over frames it processed costs one frame, not
 # a replay: about 25 s of a 10 Hz drive around the playhead. Measured with tracemalloc over
 # recordings/highway (all 150 states kept): 86 KB a state, of which the 360 x 200 background
 # is 72 KB, the pitch histogram 2 KB, the copied tracks (8 on average, 15 at most) and the
 # rest 12 KB. 256 states come to about 22 MB per engine (a client comparing A and B has two).
 KEPT_STATES = 256
-
-
-class FrameCache:
-    """The last CACHED_FRAMES frames read from `frames`, so that replays and redraws near the
-    playhead do not decode them again. One reader (the drive's render worker)."""
-
-    def __init__(self, frames: Frames, size: int = CACHED_FRAMES) -> None:
-        self._frames = frames
-        self._size = size
-        self._kept: OrderedDict[int, FrameInput] = OrderedDict()
-
-    def __len__(self) -> int:
-        return len(self._frames)
-
-    def frame(self, i: int) -> FrameInput:
-        if i in self._kept:
-            self._kept.move_to_end(i)
-            return self._kept[i]
-        frame = self._frames.frame(i)
-        self._kept[i] = frame
-        if len(self._kept) > self._size:
-            self._kept.popitem(last=False)
-        return frame
 
 
 @dataclass

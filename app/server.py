@@ -22,7 +22,7 @@ import viser
 
 from app.catalog import list_recordings, resolve_recording
 from app.clip_export import export_clip
-from app.engines import ClientEngines, FrameCache
+from app.engines import ClientEngines
 from app.metrics_panel import Evaluate
 from app.page_url import read_page, show_query
 from app.presenter import PresenterSession
@@ -288,19 +288,18 @@ class InspectorServer:
             if name in self._drives:
                 return self._drives[name]
             drive = self._open_drive(resolve_recording(self.recordings_root, name))
-            frames = FrameCache(drive)
             engines = ClientEngines(drive.camera)
 
             def render(client_id: int, state: ViewState) -> FrameView | Exception:
                 try:
                     index = state.frame
                     a, b = PARAMETER_SETS
-                    result = engines.result((client_id, a), frames, state.params, index, True)
+                    result = engines.result((client_id, a), drive, state.params, index, True)
                     result_b = None
                     if state.params_b is not None:
                         params_b = state.params_b
-                        result_b = engines.result((client_id, b), frames, params_b, index, True)
-                    return render_view(drive, state, result, frames.frame(index), result_b)
+                        result_b = engines.result((client_id, b), drive, params_b, index, True)
+                    return render_view(drive, state, result, drive.frame(index), result_b)
                 except RecordingError as err:  # a damaged frame: say so on the page
                     return err
                 except Exception as err:  # the page says so; the log keeps the traceback

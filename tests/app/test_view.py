@@ -8,7 +8,7 @@ import pytest
 from app_fakes import HEIGHT_PX, FakeDrive
 
 from app import draw, overlays
-from app.engines import ClientEngines, FrameCache
+from app.engines import ClientEngines
 from app.state import Layers, Panels, ViewState
 from app.view import (
     AB_GAP_PX,
@@ -23,7 +23,6 @@ from app.view import (
     timings_markdown,
 )
 from core.engine import StageTimings
-from core.io.frame import FrameInput
 from core.params import Params
 
 
@@ -114,21 +113,6 @@ def test_a_scrub_back_takes_up_the_state_the_engine_kept() -> None:
     plain = ClientEngines(drive.camera, keep_states=0)
     plain.result("a", drive, Params(), 6)
     assert plain.result("a", drive, Params(), 3).replayed == 3  # a replay
-
-
-def test_the_frame_cache_keeps_the_last_frames_read() -> None:
-    class Counting(FakeDrive):
-        reads = 0
-
-        def frame(self, index: int) -> FrameInput:
-            Counting.reads += 1
-            return super().frame(index)
-
-    cache = FrameCache(Counting(frames=10), size=3)
-    for i in (0, 1, 2, 0, 3, 1):
-        assert cache.frame(i).index == i
-    assert Counting.reads == 5  # 0 again was kept; 1 had been pushed out by 3
-    assert len(cache) == 10
 
 
 def test_only_the_stage_picture_shown_is_drawn() -> None:
