@@ -7,95 +7,48 @@
   the errors are", for a jump list;
 - `slider_marks`: those frames as a viser slider's `marks`, labelled with short codes.
 
-The errors, in `ERROR_KINDS` order (the listings of `core.evaluation.report.tables`):
-
-    kind           listing                                   ids in the text
-    vehicle FN     report.vehicles.fn_at                     truth ids
-    vehicle RFN    report.vehicles.rfn_at                    truth ids
-    vehicle FP     report.vehicles.fp_at                     radar targets
-    guard-rail FN  report.guardrails.fn_at                   radar targets
-    guard-rail FP  report.guardrails.fp_at                   radar targets
-    pedestrian FN  report.pedestrians["vehicles"].missed_at  truth ids
-    pedestrian FP  report.pedestrians["vehicles"].false_at   none: counted
-
-Pedestrians are those after both fusion filters; the guard-rail FP include the vehicles
-labelled guard rail.
-
-NVO are right answers, and the tracked output's listings repeat the detections' frames:
-neither is marked. The listings' frame indices are the recording's own, so a report of one
-recording is expected (a total's listings mix recordings).
+The errors are `core.evaluation.evaluate.error_listings`, in its order (`ERROR_KINDS`): the
+listings of `fusionscope evaluate`'s "Where the errors are". Their frame indices are the
+recording's own, so a report of one recording is expected (a total's listings mix
+recordings).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
-from core.evaluation.evaluate import RecordingReport
+from core.evaluation.evaluate import ErrorListing, RecordingReport, error_listings
 from core.evaluation.report import format_markdown, tables
 
-Listing = tuple[tuple[int, int], ...]
 SliderMark = int | tuple[int, str]
 
 
 @dataclass(frozen=True)
-class _Kind:
-    """One kind of error: where the report lists it and how a person reads it.
+class _Words:
+    """How a person reads one kind of error: code, the short code of a slider label; one,
+    many: the text before the ids of one error and of several on a frame."""
 
-    code: the short code of a slider label; one, many: the text before the ids of one error
-    and of several on a frame; ids: the text names the ids (else it counts the errors).
-    """
-
-    name: str
     code: str
-    listing: Callable[[RecordingReport], Listing]
     one: str
     many: str
-    ids: bool = True
 
 
-_KINDS = (
-    _Kind("vehicle FN", "FN", lambda r: r.vehicles.fn_at, "FN vehicle", "FN vehicles"),
-    _Kind("vehicle RFN", "RFN", lambda r: r.vehicles.rfn_at, "RFN vehicle", "RFN vehicles"),
-    _Kind(
-        "vehicle FP",
-        "FP",
-        lambda r: r.vehicles.fp_at,
-        "FP vehicle from radar target",
-        "FP vehicles from radar targets",
+_WORDS = {
+    "vehicle FN": _Words("FN", "FN vehicle", "FN vehicles"),
+    "vehicle RFN": _Words("RFN", "RFN vehicle", "RFN vehicles"),
+    "vehicle FP": _Words("FP", "FP vehicle from radar target", "FP vehicles from radar targets"),
+    "guard-rail FN": _Words(
+        "FN", "FN guard rail at radar target", "FN guard rail at radar targets"
     ),
-    _Kind(
-        "guard-rail FN",
-        "FN",
-        lambda r: r.guardrails.fn_at,
-        "FN guard rail at radar target",
-        "FN guard rail at radar targets",
+    "guard-rail FP": _Words(
+        "FP", "FP guard rail at radar target", "FP guard rail at radar targets"
     ),
-    _Kind(
-        "guard-rail FP",
-        "FP",
-        lambda r: r.guardrails.fp_at,
-        "FP guard rail at radar target",
-        "FP guard rail at radar targets",
-    ),
-    _Kind(
-        "pedestrian FN",
-        "FN",
-        lambda r: r.pedestrians["vehicles"].missed_at,
-        "FN pedestrian",
-        "FN pedestrians",
-    ),
-    _Kind(
-        "pedestrian FP",
-        "FP",
-        lambda r: r.pedestrians["vehicles"].false_at,
-        "FP pedestrian",
-        "FP pedestrians",
-        ids=False,
-    ),
-)
-ERROR_KINDS: tuple[str, ...] = tuple(k.name for k in _KINDS)
-CODE_OF_KIND: dict[str, str] = {k.name: k.code for k in _KINDS}
+    "pedestrian FN": _Words("FN", "FN pedestrian", "FN pedestrians"),
+    "pedestrian FP": _Words("FP", "FP pedestrian", "FP pedestrians"),
+}
+ERROR_KINDS: tuple[str, ...] = tuple(_WORDS)  # error_listings' kinds, in its order
+CODE_OF_KIND: dict[str, str] = {kind: w.code for kind, w in _WORDS.items()}
 CODES = ("FN", "RFN", "FP")  # in a label's order
 # Labels are a few characters ("FN+FP", about 35 px); a slider in viser's side panel is about
 # 300 px wide, so more than about 8 labels run into each other.
@@ -125,11 +78,12 @@ def metrics_markdown(report: RecordingReport) -> str:
     return format_markdown(tables([report], report, listings=False))
 
 
-def _item(kind: _Kind, ids: Sequence[int]) -> str:
-    if not kind.ids:
-        return kind.one if len(ids) == 1 else f"{len(ids)} {kind.many}"
+def _item(listing: ErrorListing, ids: Sequence[int]) -> str:
+    words = _WORDS[listing.kind]
+    if not listing.ids:
+        return words.one if len(ids) == 1 else f"{len(ids)} {words.many}"
     joined = ", ".join(str(i) for i in sorted(ids))
-    return f"{kind.one if len(ids) == 1 else kind.many} {joined}"
+    return f"{words.one if len(ids) == 1 else words.many} {joined}"
 
 
 def error_marks(
@@ -144,16 +98,17 @@ def error_marks(
     unknown = sorted(set(kinds) - set(ERROR_KINDS))
     if unknown:
         raise ValueError(f"kinds: expected some of {', '.join(ERROR_KINDS)}; got {unknown[0]!r}")
+    listings = [e for e in error_listings(report) if e.kind in kinds]
     found: dict[int, dict[str, list[int]]] = {}
-    for kind in (k for k in _KINDS if k.name in kinds):
-        for frame, what in kind.listing(report):
-            found.setdefault(frame, {}).setdefault(kind.name, []).append(what)
+    for listing in listings:
+        for frame, what in listing.at:
+            found.setdefault(frame, {}).setdefault(listing.kind, []).append(what)
     marks = []
     for frame in sorted(found):
         of_frame = found[frame]
-        present = [k for k in _KINDS if k.name in of_frame]
-        text = "; ".join(_item(k, of_frame[k.name]) for k in present)
-        marks.append(ErrorMark(frame, tuple(k.name for k in present), f"frame {frame}: {text}"))
+        present = [e for e in listings if e.kind in of_frame]
+        text = "; ".join(_item(e, of_frame[e.kind]) for e in present)
+        marks.append(ErrorMark(frame, tuple(e.kind for e in present), f"frame {frame}: {text}"))
     return tuple(marks)
 
 

@@ -73,7 +73,13 @@ import numpy as np
 import yaml
 
 from core.evaluation.codec import CodecError, decode, empty, encode
-from core.evaluation.evaluate import PEDESTRIAN_STAGES, RecordingReport, evaluate_recording, total
+from core.evaluation.evaluate import (
+    PEDESTRIAN_STAGES,
+    RecordingReport,
+    error_listings,
+    evaluate_recording,
+    total,
+)
 from core.evaluation.objects import BoxScore
 from core.evaluation.report import Table, figures_json
 from core.io.errors import RecordingError
@@ -683,20 +689,9 @@ class RankedSet:
 
 def errors_at(r: RecordingReport) -> Iterator[int]:
     """The frame index of every error `fusionscope evaluate` lists under "Where the errors
-    are": vehicle FN, RFN and FP, guard-rail FN and FP (vehicles labelled are among those),
-    pedestrians missed and false boxes after both fusion filters. NVO are right answers and
-    the tracked output repeats the detections', so neither counts."""
-    final = r.pedestrians["vehicles"]
-    for at in (
-        r.vehicles.fn_at,
-        r.vehicles.rfn_at,
-        r.vehicles.fp_at,
-        r.guardrails.fn_at,
-        r.guardrails.fp_at,
-        final.missed_at,
-        final.false_at,
-    ):
-        for frame, _ in at:
+    are" (`core.evaluation.evaluate.error_listings`), once per error."""
+    for listing in error_listings(r):
+        for frame, _ in listing.at:
             yield frame
 
 

@@ -75,6 +75,41 @@ class RecordingReport:
     baselines: BaselineReport | None = None
 
 
+@dataclass(frozen=True)
+class ErrorListing:
+    """One kind of error a report lists under "Where the errors are": kind, e.g. "vehicle
+    FN"; title, the listing's row in `fusionscope evaluate`; at, (frame index, id) pairs;
+    ids: whether the ids name something (a truth id, a radar target) or only count."""
+
+    kind: str
+    title: str
+    at: tuple[tuple[int, int], ...]
+    ids: bool = True
+
+
+def error_listings(r: RecordingReport) -> tuple[ErrorListing, ...]:
+    """The errors of `r` by kind: vehicle FN, RFN and FP, guard-rail FN and FP (the vehicles
+    labelled guard rail are among the FP), pedestrians missed and false boxes after both
+    fusion filters. NVO are right answers and the tracked output repeats the detections'
+    frames, so neither is listed."""
+    final = r.pedestrians["vehicles"]
+    return (
+        ErrorListing("vehicle FN", "vehicle FN (truth id: frames)", r.vehicles.fn_at),
+        ErrorListing("vehicle RFN", "vehicle RFN (truth id: frames)", r.vehicles.rfn_at),
+        ErrorListing("vehicle FP", "vehicle FP (radar target: frames)", r.vehicles.fp_at),
+        ErrorListing("guard-rail FN", "guard-rail FN (radar target: frames)", r.guardrails.fn_at),
+        ErrorListing("guard-rail FP", "guard-rail FP (radar target: frames)", r.guardrails.fp_at),
+        ErrorListing(
+            "pedestrian FN",
+            "pedestrians missed after both filters (truth id: frames)",
+            final.missed_at,
+        ),
+        ErrorListing(
+            "pedestrian FP", "pedestrian FP after both filters (frames)", final.false_at, False
+        ),
+    )
+
+
 def _vehicle_estimates(result: FrameResult) -> list[Estimate]:
     return [
         Estimate(v.distance_m, v.lateral_m, v.width_m, v.target_indices)

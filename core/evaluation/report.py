@@ -25,7 +25,7 @@ from typing import Any
 from core.bench import PAPER_002_MS
 
 from .baselines import Timing
-from .evaluate import PEDESTRIAN_STAGES, RecordingReport
+from .evaluate import PEDESTRIAN_STAGES, RecordingReport, error_listings
 from .mot import MotScore
 from .objects import BoxScore, MaskScore, PitchScore, RailScore
 from .vehicles import EventStats, FrameStats
@@ -421,20 +421,8 @@ def tables(
             Table(
                 f"Where the errors are in {r.name} (frame indices per truth id or radar target)",
                 ("what", "where"),
-                (
-                    ("vehicle FN (truth id: frames)", _ranges(r.vehicles.fn_at)),
-                    ("vehicle RFN (truth id: frames)", _ranges(r.vehicles.rfn_at)),
-                    ("vehicle FP (radar target: frames)", _ranges(r.vehicles.fp_at)),
-                    ("guard-rail FN (radar target: frames)", _ranges(r.guardrails.fn_at)),
-                    ("guard-rail FP (radar target: frames)", _ranges(r.guardrails.fp_at)),
-                    (
-                        "pedestrians missed after both filters (truth id: frames)",
-                        _ranges(r.pedestrians["vehicles"].missed_at),
-                    ),
-                    (
-                        "pedestrian FP after both filters (frames)",
-                        _frames(r.pedestrians["vehicles"].false_at),
-                    ),
+                tuple(
+                    (e.title, _ranges(e.at) if e.ids else _frames(e.at)) for e in error_listings(r)
                 ),
             )
         )

@@ -13,7 +13,12 @@ from app_fakes import Recordings
 
 from app.metrics import ERROR_KINDS, ErrorMark, error_marks, metrics_markdown, slider_marks
 from core.evaluation.codec import empty
-from core.evaluation.evaluate import PEDESTRIAN_STAGES, RecordingReport, evaluate_recording
+from core.evaluation.evaluate import (
+    PEDESTRIAN_STAGES,
+    RecordingReport,
+    error_listings,
+    evaluate_recording,
+)
 from core.evaluation.objects import BoxScore, RailScore
 from core.evaluation.vehicles import FrameStats
 from core.io.drive import Drive
@@ -168,7 +173,7 @@ def test_a_negative_label_limit_is_refused() -> None:
 
 
 def listed(r: RecordingReport) -> dict[str, set[int]]:
-    """The frames of each kind's listing (the table of app.metrics' docstring)."""
+    """The frames of each kind of error, read from the report's fields."""
     after_filters = r.pedestrians["vehicles"]
     at = {
         "vehicle FN": r.vehicles.fn_at,
@@ -184,6 +189,7 @@ def listed(r: RecordingReport) -> dict[str, set[int]]:
 
 def check_marks(r: RecordingReport) -> None:
     found = error_marks(r)
+    assert tuple(e.kind for e in error_listings(r)) == ERROR_KINDS
     # core.sweep counts the errors the evaluation lists, frame by frame
     assert [m.frame for m in found] == sorted(set(errors_at(r))), r.name
     for kind, frames in listed(r).items():
