@@ -332,7 +332,9 @@ class InspectorServer:
                 def evaluate(
                     params: Params, progress: Callable[[int, int], None]
                 ) -> RecordingReport:
-                    return evaluate_recording(drive.path, params, progress, timing=False)
+                    return evaluate_recording(
+                        drive.path, params, progress, timing=False, frames=drive
+                    )
 
             entry = _OpenDrive(drive, engines, worker, can_series(drive), evaluate, annotations)
             self._drives[name] = entry

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TypeVar
 
 from core.bench import GuardRailSavings, guard_rail_savings, one_thread
-from core.engine import FrameResult, FusionEngine
+from core.engine import FrameResult, Frames, FusionEngine
 from core.io.drive import Drive
 from core.io.frame import FrameInput
 from core.io.groundtruth import FrameTruth
@@ -258,13 +258,22 @@ def evaluate_recording(
     progress: Progress | None = None,
     timing: bool = True,
     baselines: bool = False,
+    frames: Frames | None = None,
 ) -> RecordingReport:
     """Play the recording at `path` through the engine and score it (module docstring);
     timing: also time paper 002's table I (VD, GRD, OBM) on it, one thread; baselines:
-    also run and score core.baselines on the same frames (evaluation.baselines).
-    RecordingError when it cannot be read; ValueError when it has no ground truth. OpenCV
-    runs on one thread, so that the stage and baseline times are one thread's."""
+    also run and score core.baselines on the same frames (evaluation.baselines); frames:
+    the recording's frames already open (the inspector's drive, which keeps the frames it
+    decoded) to read instead of decoding them again; the ground truth is read from `path`
+    as it is now. RecordingError when it cannot be read; ValueError when it has no ground
+    truth, or `frames` are not as many as the recording's. OpenCV runs on one thread, so
+    that the stage and baseline times are one thread's."""
     with one_thread(), Drive(path) as drive:
+        source: Frames = drive if frames is None else frames
+        if len(source) != len(drive):
+            raise ValueError(
+                f"frames: expected the {len(drive)} frames of {drive.path}, got {len(source)}"
+            )
         if not drive.has_truth:
             why = drive.truth_problem or (
                 "found none (annotations count only on frames marked fully annotated)"
@@ -278,7 +287,7 @@ def evaluate_recording(
         baseline = BaselineScorer(params, drive.camera) if baselines else None
         calibrated = drive.camera.extrinsics.pitch_rad
         for i in range(len(drive)):
-            frame = drive.frame(i)
+            frame = source.frame(i)
             result = engine.process(frame)
             truth = drive.truth(i)
             mask = None if truth is None else scorer.add(frame, result, truth, calibrated)

@@ -22,6 +22,7 @@ from core.evaluation.evaluate import (
 from core.evaluation.objects import BoxScore, RailScore
 from core.evaluation.vehicles import FrameStats
 from core.io.drive import Drive
+from core.io.frame import FrameInput
 from core.params import Params
 from core.sweep import errors_at
 
@@ -212,3 +213,28 @@ def test_evaluation_reports_progress_once_per_frame(recordings: Recordings) -> N
         n = len(drive)
     assert calls == [(done, n) for done in range(1, n + 1)]
     check_marks(r)
+
+
+def test_evaluation_reads_the_frames_of_an_open_drive_when_given(recordings: Recordings) -> None:
+    path = recordings.root / recordings.name
+
+    class Counting(Drive):
+        reads = 0
+
+        def frame(self, i: int) -> FrameInput:
+            Counting.reads += 1
+            return super().frame(i)
+
+    with Counting(path) as drive:
+        opened = Counting.reads  # the drive reads a frame on open
+        r = evaluate_recording(path, Params(), timing=False, frames=drive)
+        assert Counting.reads - opened == len(drive)
+        assert r == evaluate_recording(path, Params(), timing=False)
+
+        class Short(Counting):
+            def __len__(self) -> int:
+                return 2
+
+        with Short(path) as short, pytest.raises(ValueError) as err:
+            evaluate_recording(path, Params(), timing=False, frames=short)
+        assert str(err.value) == f"frames: expected the {len(drive)} frames of {path}, got 2"
