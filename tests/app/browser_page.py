@@ -8,27 +8,36 @@ used). Without it the tests skip, except when CI or REQUIRE_BROWSER is set, wher
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import os
+import sys
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+from types import ModuleType
 
 from playwright.sync_api import Error as PlaywrightError
 from playwright.sync_api import Locator, Page
 
 from app.server import DriveOpener, InspectorServer, open_drive
 
-CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
+BENCH_SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "bench_inspector.py"
+
+
+def load_bench_script() -> ModuleType:
+    """scripts/bench_inspector.py as a module (it is a script, not a package module)."""
+    spec = importlib.util.spec_from_file_location("bench_inspector", BENCH_SCRIPT)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up
+    spec.loader.exec_module(module)
+    return module
+
+
+# Chromium as the benchmark runs it: Debian's, headless, without a GPU or background traffic
+_BENCH = load_bench_script()
+CHROMIUM: Path = _BENCH.CHROMIUM
+CHROMIUM_ARGS: list[str] = _BENCH.CHROMIUM_ARGS
 SCREENSHOTS = Path(tempfile.gettempdir()) / "fusionscope-browser-tests"
 TIMEOUT_MS = 30_000
 PIXEL_READS = 5  # tries to read a picture the page may be replacing

@@ -7,27 +7,13 @@ REQUIRE_BROWSER is set, where it fails (as tests/app/test_browser.py).
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 import os
-import sys
 from pathlib import Path
-from types import ModuleType
 
 import pytest
-
-SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "bench_inspector.py"
-CHROMIUM = Path("/usr/bin/chromium")
-
-
-def load_script() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("bench_inspector", SCRIPT)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
+from browser_page import CHROMIUM, load_bench_script
 
 
 def numbers(value: object) -> list[float]:
@@ -51,7 +37,7 @@ def test_tiny_run_prints_finite_figures_and_stops_its_server(
         if os.environ.get("CI") or os.environ.get("REQUIRE_BROWSER"):
             pytest.fail(message + " (CI / REQUIRE_BROWSER is set)")
         pytest.skip(message)
-    bench = load_script()
+    bench = load_bench_script()
     args = ["--seeks", "3", "--moves", "3", "--play-s", "2", "--tabs", "2", "--warmup", "1"]
     code = bench.main([*args, "--json", "--no-progress"])
     out = capsys.readouterr().out
