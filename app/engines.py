@@ -3,8 +3,8 @@ own rules (`FusionEngine.seek`: the next frame is processed, a frame whose prede
 the engine kept is processed from it, any other is replayed from its window) and a redraw of
 the same frame and parameters (a layer toggled) costs nothing.
 
-Used by a drive's render worker alone, which is the drive's only reader; `forget` may come
-from another thread (a client leaving).
+Used by a drive's render worker alone (the drive itself may be read from other threads too,
+as the metrics evaluation does); `forget` may come from another thread (a client leaving).
 """
 
 from __future__ import annotations

@@ -2,8 +2,8 @@
 
 Each client has one pending slot: a request that arrives while the worker is busy replaces
 the one waiting for that client, so dragging the timeline renders the frame under the
-cursor, not the hundreds it passed over. One worker per drive also makes it the only reader
-of that drive, so readers need not be thread-safe.
+cursor, not the hundreds it passed over. One worker per drive renders that drive's frames
+for every client.
 """
 
 from __future__ import annotations
