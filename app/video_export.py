@@ -15,7 +15,7 @@ Formats, by OUT's suffix:
       (Constrained Baseline: every browser plays it): on recordings/highway (640x570 with
       the banner, one thread) 2.3 ms a frame, colour conversion included, and 3.4 MB for
       15 s, against 3.1 ms and 3.0 MB with CABAC on (Main profile) and 9 ms and 1.7 MB for
-      "veryfast". The drive's decoding and the engine take about 8 ms a frame: the
+      "veryfast". The drive's reading and the engine take about 6 ms a frame: the
       encoder's speed counts more than the file's size.
     - .gif: for slides, scaled to `gif_width_px` (default `GIF_PICTURE_WIDTH_PX` per camera
       picture); each frame gets its own 256-colour palette (Pillow's fast octree
