@@ -53,7 +53,7 @@ PLAYBACK_RATES = ("0.25x", "0.5x", "1x", "2x", "4x")  # of the drive's own frame
 LAYER_LABELS = {**OVERLAY_OF_LAYER, "truth": "ground truth"}
 PANEL_LABELS = {"bird_eye": "bird's-eye view (3D)", "can": "CAN speed and yaw rate"}
 # the right-hand panel, top to bottom
-CAMERA_ORDER, DIFF_ORDER, STAGE_CHOICE_ORDER, STAGE_ORDER, CAN_ORDER = range(5)
+STAGE_CHOICE_ORDER, CAMERA_ORDER, DIFF_ORDER, STAGE_ORDER, CAN_ORDER = range(5)
 ANNOTATION_ORDER = 6.5  # the Annotation folder: after Metrics (6), before Keys (7)
 DEMO_ORDER = 2.5  # the Share and demo folder: under the Timeline (2)
 TIMINGS_WINDOW = 50  # frames in the running median of the stage timings
@@ -177,7 +177,6 @@ class ClientSession:
         self._can_plot: viser.GuiUplotHandle | None = None
         self._can_frame = -1  # the frame the CAN plot is around
         self._timings: viser.GuiMarkdownHandle | None = None
-        self._stage_image: viser.GuiImageHandle | None = None
         self._metrics: MetricsPanel | None = None
         self._bird_eyes = BirdEyeViews(client)
 
@@ -397,10 +396,10 @@ class ClientSession:
         with self.client.atomic():
             if self._image is None:
                 with self._camera_tab:
-                    self._image = gui.add_image(view.image, format="jpeg", order=CAMERA_ORDER)
+                    self._image = gui.add_image(view.with_stage, format="jpeg", order=CAMERA_ORDER)
                     self._diff = gui.add_markdown("", order=DIFF_ORDER)
             else:
-                self._image.image = view.image
+                self._image.image = view.with_stage
             if self._diff is not None and self._diff.content != view.diff:
                 self._diff.content = view.diff
             readout = self._due(self._readout_pace)
@@ -453,18 +452,9 @@ class ClientSession:
             )
 
     def _show_stage(self, view: FrameView) -> None:
-        """The stage picture chosen (or the timings table) under the camera."""
+        """The timings table under the camera, when it is the stage chosen (a stage picture
+        is part of the camera picture, `FrameView.with_stage`)."""
         gui = self.client.gui
-        if view.panels:
-            _, image = view.panels[0]
-            if self._stage_image is None:
-                with self._camera_tab:
-                    self._stage_image = gui.add_image(image, format="jpeg", order=STAGE_ORDER)
-            else:
-                self._stage_image.image = image
-        elif self._stage_image is not None:
-            self._stage_image.remove()
-            self._stage_image = None
         if self._state.panels.stage == "timings":
             median = median_timings(self._recent_timings)
             table = timings_markdown(view.timings, median, len(self._recent_timings))
@@ -689,10 +679,9 @@ class ClientSession:
         if self._metrics is not None:
             self._metrics.remove()
             self._metrics = None
-        for handle in (self._image, self._diff, self._can_plot, self._timings, self._stage_image):
+        for handle in (self._image, self._diff, self._can_plot, self._timings):
             if handle is not None:
                 handle.remove()
         self._bird_eyes.remove()
-        self._stage_image = None
         self._timeline = self._slider = self._play = self._readout = self._image = None
         self._timings = self._rate = self._diff = self._can_plot = None

@@ -17,6 +17,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Protocol
 
+import cv2
 import numpy as np
 import numpy.typing as npt
 
@@ -37,6 +38,7 @@ NS_PER_S = 1e9
 CAN_WINDOW_HALF_S = 5.0  # the CAN plot shows this long before and after the playhead
 AB_GAP_PX = 8  # between the A and B camera pictures
 AB_GAP_COLOUR = (255, 255, 255)
+STAGE_GAP_PX = 8  # between the camera picture and the stage picture under it
 AB_BIRD_EYE_GAP_M = 2.0  # between the A and B bird's-eye views in the 3D scene
 # the stage pictures' names, by `app.state.STAGES`
 STAGE_TITLES = {
@@ -90,8 +92,10 @@ class FrameSource(Protocol):
 @dataclass(frozen=True, eq=False)
 class FrameView:
     """A rendered frame: its index, the (H + strip, W, 3) uint8 RGB camera picture (A and B
-    side by side, (H + strip, 2 W + gap, 3), when comparing), the read-out line, set A's
-    stage timings, the stage picture shown as (title, RGB image), and the markdown
+    side by side, (H + strip, 2 W + gap, 3), when comparing), the same with the stage
+    picture under it (`stage_under`; the camera picture alone when none is shown), which
+    is what the inspector's camera panel shows, the read-out line, set A's stage timings,
+    the stage picture shown as (title, RGB image), and the markdown
     list of detections only A or only B has ("" when not comparing); the bird's-eye views
     as (geometry, ground texture) for A, and B beside it, when that panel is on; preview:
     a result in it is the engine's preview (`FusionEngine.preview`), to be replaced by the
@@ -101,6 +105,7 @@ class FrameView:
 
     frame: int
     image: draw.RgbImage
+    with_stage: draw.RgbImage
     readout: str
     timings: StageTimings
     panels: tuple[tuple[str, draw.RgbImage], ...] = ()
@@ -188,12 +193,14 @@ def render_view(
     annotation = None
     if state.annotating:
         annotation = (draw.grey_to_rgb(frame.image), seeds(result))
+    stage = stage_panels(result, state)
     return FrameView(
         state.frame,
         picture,
+        stage_under(picture, stage[0][1]) if stage else picture,
         text,
         result.timings,
-        stage_panels(result, state),
+        stage,
         diff,
         bird_eyes,
         preview,
@@ -244,6 +251,28 @@ def side_by_side(a: draw.RgbImage, b: draw.RgbImage) -> draw.RgbImage:
     """`a`, a white gap of AB_GAP_PX and `b`, left to right (both of one height)."""
     gap = draw.filled(a.shape[0], AB_GAP_PX, AB_GAP_COLOUR)
     return np.ascontiguousarray(np.hstack([a, gap, b]))
+
+
+def stage_under(picture: draw.RgbImage, stage: draw.RgbImage) -> draw.RgbImage:
+    """`picture` with `stage` under it, a white gap of STAGE_GAP_PX between, as one picture
+    of `picture`'s width: `stage` shrunk to that width (area averaging, aspect kept) when
+    wider, centred on white when narrower.
+
+    The inspector sends the page this one picture, not two: playing highway at 4x (40
+    frames a second asked) in headless Chromium on two cores, the page decoded 4-10
+    frames a second of the two pictures and 20 of the one (`scripts/bench_inspector.py`)."""
+    draw.require_rgb_image("picture", picture)
+    draw.require_rgb_image("stage", stage)
+    width = picture.shape[1]
+    h, w = stage.shape[:2]
+    if w > width:
+        size = (width, max(1, round(h * width / w)))
+        stage = np.asarray(cv2.resize(stage, size, interpolation=cv2.INTER_AREA), dtype=np.uint8)
+    out = draw.filled(picture.shape[0] + STAGE_GAP_PX + stage.shape[0], width, AB_GAP_COLOUR)
+    out[: picture.shape[0]] = picture
+    left = (width - stage.shape[1]) // 2
+    out[picture.shape[0] + STAGE_GAP_PX :, left : left + stage.shape[1]] = stage
+    return out
 
 
 def diff_markdown(a: FrameResult, b: FrameResult) -> str:

@@ -19,7 +19,10 @@ from types import ModuleType
 from playwright.sync_api import Error as PlaywrightError
 from playwright.sync_api import Locator, Page
 
+from app.draw import STRIP_HEIGHT_PX
 from app.server import DriveOpener, InspectorServer, open_drive
+from app.view import STAGE_GAP_PX
+from core.io.drive import Drive
 
 BENCH_SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "bench_inspector.py"
 
@@ -97,40 +100,45 @@ def camera_src(page: Page) -> str:
     return page.locator(CAMERA_IMG).first.get_attribute("src") or ""
 
 
-def pixels(image: Locator) -> str:
-    """A digest of the decoded pixels of an <img>, to tell pictures apart (not their URLs).
-    A picture the page replaces while it is read (its blob URL revoked mid-decode) is read
-    again."""
+def pixels(image: Locator, top_px: int = 0) -> str:
+    """A digest of the decoded pixels of an <img> from row `top_px` down, to tell pictures
+    apart (not their URLs). A picture the page replaces while it is read (its blob URL
+    revoked mid-decode) is read again."""
     for _ in range(PIXEL_READS - 1):
         with contextlib.suppress(PlaywrightError):
-            return _digest(image)
+            return _digest(image, top_px)
         image.page.wait_for_timeout(100)
-    return _digest(image)
+    return _digest(image, top_px)
 
 
-DIGEST_JS = """async i => { await i.decode(); const c = document.createElement('canvas');
+DIGEST_JS = """async (i, top) => { await i.decode(); const c = document.createElement('canvas');
     c.width = i.naturalWidth; c.height = i.naturalHeight;
     const g = c.getContext('2d'); g.drawImage(i, 0, 0);
-    const d = g.getImageData(0, 0, c.width, c.height).data;
+    const d = g.getImageData(0, top, c.width, c.height - top).data;
     let h = 0; for (let k = 0; k < d.length; k += 7) h = (h * 31 + d[k]) >>> 0;
     return `${c.width}x${c.height}:${h}`; }"""
 
 
-def _digest(image: Locator) -> str:
-    return str(image.evaluate(DIGEST_JS))
+def _digest(image: Locator, top_px: int) -> str:
+    return str(image.evaluate(DIGEST_JS, top_px))
 
 
-def stage_picture(page: Page) -> Locator:
-    """The stage picture under the camera."""
-    return page.locator(VISIBLE_IMG).nth(1)
+def stage_top_px(drive_path: Path) -> int:
+    """The first row of the stage picture in the camera panel's picture (`pixels`' top_px):
+    under the camera picture of the drive at `drive_path`, its caption and the gap
+    (`app.view.stage_under`)."""
+    with Drive(drive_path) as drive:
+        height_px = drive.camera.intrinsics.height_px
+    return height_px + STRIP_HEIGHT_PX + STAGE_GAP_PX
 
 
-def changed_pixels(page: Page, image: Locator, before: str) -> str:
-    """Wait until `image` shows other pixels than `before`, the same on two reads 100 ms
-    apart (a read while the page swaps pictures can catch one half drawn); its digest."""
+def changed_pixels(page: Page, image: Locator, before: str, top_px: int = 0) -> str:
+    """Wait until `image` shows other pixels than `before` (from row `top_px` down), the
+    same on two reads 100 ms apart (a read while the page swaps pictures can catch one half
+    drawn); its digest."""
     last = before
     for _ in range(TIMEOUT_MS // 100):
-        now = pixels(image)
+        now = pixels(image, top_px)
         if now != before and now == last:
             return now
         last = now

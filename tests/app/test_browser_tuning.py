@@ -17,7 +17,7 @@ from browser_page import (
     pixels,
     serving,
     set_field,
-    stage_picture,
+    stage_top_px,
 )
 from playwright.sync_api import Page, expect
 
@@ -43,13 +43,16 @@ def test_a_threshold_changes_the_binarised_image(recordings: Recordings, page: P
         camera_src(page)
         set_field(page, "go to time s", "1.0")  # motion stereo needs frames before it
         page.get_by_text("frame 10 /").wait_for(timeout=TIMEOUT_MS)
-        stage_picture(page).wait_for(timeout=TIMEOUT_MS)
-        before = pixels(stage_picture(page))
+        picture, top_px = (
+            page.locator(CAMERA_IMG).first,
+            stage_top_px(recordings.root / recordings.name),
+        )
+        before = pixels(picture, top_px)
         open_folders(page, "Parameters", "motion_stereo")
         set_field(page, XI, "80")
-        after = changed_pixels(page, stage_picture(page), before)
+        after = changed_pixels(page, picture, before, top_px)
         set_field(page, XI, "20")  # the paper's value again: the first picture again
-        assert changed_pixels(page, stage_picture(page), after) == before
+        assert changed_pixels(page, picture, after, top_px) == before
 
 
 def test_a_layer_toggled_off_and_on_changes_the_picture_and_back(

@@ -11,8 +11,10 @@ from app import draw, overlays
 from app.engines import ClientEngines
 from app.state import Layers, Panels, ViewState
 from app.view import (
+    AB_GAP_COLOUR,
     AB_GAP_PX,
     OVERLAY_OF_LAYER,
+    STAGE_GAP_PX,
     STAGE_TITLES,
     FrameView,
     can_series,
@@ -20,6 +22,7 @@ from app.view import (
     median_timings,
     readout_text,
     render_view,
+    stage_under,
     timings_markdown,
 )
 from core.engine import StageTimings
@@ -115,15 +118,51 @@ def test_a_scrub_back_takes_up_the_state_the_engine_kept() -> None:
     assert plain.result("a", drive, Params(), 3).replayed == 3  # a replay
 
 
-def test_only_the_stage_picture_shown_is_drawn() -> None:
+def test_only_the_stage_picture_shown_is_drawn_and_it_goes_under_the_camera() -> None:
     drive = FakeDrive(frames=3)
     view = _view(drive, ViewState(frame=2, panels=Panels(stage="guard_rails")))
     assert [title for title, _ in view.panels] == ["Guard rails"]
+    np.testing.assert_array_equal(view.with_stage, stage_under(view.image, view.panels[0][1]))
     for nothing in ("timings", "none"):
-        assert _view(drive, ViewState(frame=2, panels=Panels(stage=nothing))).panels == ()
+        alone = _view(drive, ViewState(frame=2, panels=Panels(stage=nothing)))
+        assert alone.panels == () and alone.with_stage is alone.image
     assert _view(drive, ViewState(frame=2, panels=Panels(bird_eye=False))).bird_eyes == ()
     with pytest.raises(ValueError, match="stage: expected one of motion_stereo"):
         Panels(stage="everything")
+
+
+def test_a_narrower_stage_picture_goes_centred_under_the_camera_picture() -> None:
+    camera = draw.filled(4, 10, (1, 2, 3))
+    stage = draw.filled(3, 6, (200, 100, 50))
+    out = stage_under(camera, stage)
+    assert out.shape == (4 + STAGE_GAP_PX + 3, 10, 3)
+    np.testing.assert_array_equal(out[:4], camera)
+    np.testing.assert_array_equal(
+        out[4 : 4 + STAGE_GAP_PX], draw.filled(STAGE_GAP_PX, 10, AB_GAP_COLOUR)
+    )
+    below = out[4 + STAGE_GAP_PX :]
+    np.testing.assert_array_equal(below[:, 2:8], stage)  # (10 - 6) / 2 = 2 columns each side
+    np.testing.assert_array_equal(below[:, :2], draw.filled(3, 2, AB_GAP_COLOUR))
+    np.testing.assert_array_equal(below[:, 8:], draw.filled(3, 2, AB_GAP_COLOUR))
+
+
+def test_a_wider_stage_picture_is_shrunk_to_the_camera_pictures_width() -> None:
+    camera = draw.filled(5, 8, (0, 0, 0))
+    stage = draw.filled(6, 16, (90, 90, 90))
+    stage[:, 8:] = (30, 60, 120)  # its right half another colour
+    out = stage_under(camera, stage)
+    assert out.shape == (5 + STAGE_GAP_PX + 3, 8, 3)  # halved: 16 x 6 -> 8 x 3
+    below = out[5 + STAGE_GAP_PX :]
+    np.testing.assert_array_equal(below[:, :4], draw.filled(3, 4, (90, 90, 90)))
+    np.testing.assert_array_equal(below[:, 4:], draw.filled(3, 4, (30, 60, 120)))
+
+
+def test_a_picture_that_is_not_rgb_is_refused_by_name() -> None:
+    camera = draw.filled(5, 8, (0, 0, 0))
+    with pytest.raises(ValueError, match=r"^stage: expected an \(H, W, 3\)"):
+        stage_under(camera, np.zeros((3, 4), np.uint8))
+    with pytest.raises(ValueError, match=r"^picture: expected an \(H, W, 3\)"):
+        stage_under(np.zeros((3, 4), np.uint8), camera)
 
 
 def test_comparing_puts_a_and_b_side_by_side_and_lists_the_differences() -> None:
