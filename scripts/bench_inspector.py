@@ -17,8 +17,9 @@ With the "Motion stereo" stage picture under the camera and the bird's-eye view 
 - playback at rate 4x (40 frames/s asked of a 10 Hz drive): frames/s shown, >= 25, in one tab,
   then in one of `--tabs` tabs while the others are idle and while they all play. Frames/s
   shown: frames whose pictures were decoded in the measured page over the seconds played,
-  counted in the rendered picture updated least often (the camera's or the stage picture's:
-  each of them shows every frame, so one frame is counted once); at the end of the drive
+  counted in the rendered picture updated least often (the camera panel's picture, the
+  stage picture under the camera in it, `app.view.stage_under`; a page with several pictures
+  shows every frame in each, so one frame is counted once); at the end of the drive
   Play is pressed again (it starts over) and the restart counts as playing time.
 - server memory: VmRSS of the server (children included) after warm-up, after each quarter
   of the seeks and of the parameter changes; growth from after warm-up to after the
@@ -30,9 +31,10 @@ created the event); a MutationObserver sees each <img> get a new src (viser show
 rendered picture as a blob: URL) and calls `img.decode()` on it. The action is done at t1,
 when every visible rendered image (blob: src, laid out, non-zero size) has a src set after t0
 whose decode resolved, and, for a seek, the read-out names the target frame; t1 is the last of
-those decodes: the camera picture and the stage picture (the bird's-eye view is drawn by
-WebGL, not an <img>, and is not timed). An action not done within `--timeout-ms` is a miss;
-a miss counts as slower than any finished action in the percentiles. Each finished action is
+those decodes: the camera panel's picture, the camera and the stage picture in one (the
+bird's-eye view is drawn by WebGL, not an <img>, and is not timed). An action not done
+within `--timeout-ms` is a miss; a miss counts as slower than any finished action in the
+percentiles. Each finished action is
 also split at the moment viser's websocket worker handed the page the message batch with its
 pictures: before it, the server and the socket; after it, the page (React, blob URL, decode).
 
