@@ -34,9 +34,9 @@ whose decode resolved, and, for a seek, the read-out names the target frame; t1 
 those decodes: the camera panel's picture, the camera and the stage picture in one (the
 bird's-eye view is drawn by WebGL, not an <img>, and is not timed). An action not done
 within `--timeout-ms` is a miss; a miss counts as slower than any finished action in the
-percentiles. Each finished action is
-also split at the moment viser's websocket worker handed the page the message batch with its
-pictures: before it, the server and the socket; after it, the page (React, blob URL, decode).
+percentiles. Each finished action is also split at the moment viser's websocket worker
+handed the page the message batch with its pictures: before it, the server and the socket;
+after it, the page (React, blob URL, decode).
 
 The page is driven as a person would, with two departures: a value is put in a number field
 in one edit (Playwright's fill), since viser sends a number field's value on every change and
