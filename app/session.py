@@ -53,7 +53,7 @@ PLAYBACK_RATES = ("0.25x", "0.5x", "1x", "2x", "4x")  # of the drive's own frame
 LAYER_LABELS = {**OVERLAY_OF_LAYER, "truth": "ground truth"}
 PANEL_LABELS = {"bird_eye": "bird's-eye view (3D)", "can": "CAN speed and yaw rate"}
 # the right-hand panel, top to bottom
-STAGE_CHOICE_ORDER, CAMERA_ORDER, DIFF_ORDER, STAGE_ORDER, CAN_ORDER = range(5)
+STAGE_CHOICE_ORDER, CAMERA_ORDER, DIFF_ORDER, TIMINGS_ORDER, CAN_ORDER = range(5)
 ANNOTATION_ORDER = 6.5  # the Annotation folder: after Metrics (6), before Keys (7)
 DEMO_ORDER = 2.5  # the Share and demo folder: under the Timeline (2)
 TIMINGS_WINDOW = 50  # frames in the running median of the stage timings
@@ -460,7 +460,7 @@ class ClientSession:
             table = timings_markdown(view.timings, median, len(self._recent_timings))
             if self._timings is None:
                 with self._camera_tab:
-                    self._timings = gui.add_markdown(table, order=STAGE_ORDER)
+                    self._timings = gui.add_markdown(table, order=TIMINGS_ORDER)
             else:
                 self._timings.content = table
         elif self._timings is not None:

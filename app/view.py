@@ -95,8 +95,8 @@ class FrameView:
     side by side, (H + strip, 2 W + gap, 3), when comparing), the same with the stage
     picture under it (`stage_under`; the camera picture alone when none is shown), which
     is what the inspector's camera panel shows, the read-out line, set A's stage timings,
-    the stage picture shown as (title, RGB image), and the markdown
-    list of detections only A or only B has ("" when not comparing); the bird's-eye views
+    the stage picture shown as (title, RGB image), and the markdown list of detections
+    only A or only B has ("" when not comparing); the bird's-eye views
     as (geometry, ground texture) for A, and B beside it, when that panel is on; preview:
     a result in it is the engine's preview (`FusionEngine.preview`), to be replaced by the
     exact one; annotation: when the tab annotates, the bare frame as RGB and what the
@@ -259,8 +259,8 @@ def stage_under(picture: draw.RgbImage, stage: draw.RgbImage) -> draw.RgbImage:
     wider, centred on white when narrower.
 
     The inspector sends the page this one picture, not two: playing highway at 4x (40
-    frames a second asked) in headless Chromium on two cores, the page decoded 4-10
-    frames a second of the two pictures and 20 of the one (`scripts/bench_inspector.py`)."""
+    frames a second asked) in headless Chromium on two cores, the page showed 4-10 frames
+    a second as two pictures and 17-28 as one (`scripts/bench_inspector.py`)."""
     draw.require_rgb_image("picture", picture)
     draw.require_rgb_image("stage", stage)
     width = picture.shape[1]
