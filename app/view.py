@@ -93,10 +93,10 @@ class FrameSource(Protocol):
 class FrameView:
     """A rendered frame: its index, the (H + strip, W, 3) uint8 RGB camera picture (A and B
     side by side, (H + strip, 2 W + gap, 3), when comparing), the same with the stage
-    picture under it (`stage_under`; the camera picture alone when none is shown), which
-    is what the inspector's camera panel shows, the read-out line, set A's stage timings,
-    the stage picture shown as (title, RGB image), and the markdown list of detections
-    only A or only B has ("" when not comparing); the bird's-eye views
+    picture shown under it (`stage_under`; the camera picture alone when none is shown),
+    which is what the inspector's camera panel shows, the read-out line, set A's stage
+    timings, and the markdown list of detections only A or only B has ("" when not
+    comparing); the bird's-eye views
     as (geometry, ground texture) for A, and B beside it, when that panel is on; preview:
     a result in it is the engine's preview (`FusionEngine.preview`), to be replaced by the
     exact one; annotation: when the tab annotates, the bare frame as RGB and what the
@@ -108,7 +108,6 @@ class FrameView:
     with_stage: draw.RgbImage
     readout: str
     timings: StageTimings
-    panels: tuple[tuple[str, draw.RgbImage], ...] = ()
     diff: str = ""
     bird_eyes: tuple[tuple[BirdEyeGeometry, draw.RgbImage], ...] = ()
     preview: bool = False
@@ -193,14 +192,13 @@ def render_view(
     annotation = None
     if state.annotating:
         annotation = (draw.grey_to_rgb(frame.image), seeds(result))
-    stage = stage_panels(result, state)
+    stage = stage_picture(result, state)
     return FrameView(
         state.frame,
         picture,
-        stage_under(picture, stage[0][1]) if stage else picture,
+        picture if stage is None else stage_under(picture, stage),
         text,
         result.timings,
-        stage,
         diff,
         bird_eyes,
         preview,
@@ -297,9 +295,9 @@ def overlay_names(layers: Layers) -> list[str]:
     return [OVERLAY_OF_LAYER[name] for name in OVERLAY_OF_LAYER if getattr(layers, name)]
 
 
-def stage_panels(result: FrameResult, state: ViewState) -> tuple[tuple[str, draw.RgbImage], ...]:
-    """The stage picture `state.panels` shows under the camera, as (title, RGB image); none
-    for "timings" (a table) and "none"."""
+def stage_picture(result: FrameResult, state: ViewState) -> draw.RgbImage | None:
+    """The stage picture `state.panels` shows under the camera; None for "timings" (a
+    table) and "none"."""
     threshold = state.params.pedestrian.symmetry_threshold
     makers = {
         "motion_stereo": lambda: panels.motion_stereo_panel(result.motion_stereo),
@@ -307,8 +305,8 @@ def stage_panels(result: FrameResult, state: ViewState) -> tuple[tuple[str, draw
         "pedestrians": lambda: panels.pedestrian_symmetry_panel(result.pedestrian, threshold),
         "guard_rails": lambda: panels.guard_rail_panel(result.guardrail.checks, result.areas),
     }
-    stage = state.panels.stage
-    return ((STAGE_TITLES[stage], makers[stage]()),) if stage in makers else ()
+    make = makers.get(state.panels.stage)
+    return None if make is None else make()
 
 
 @dataclass(frozen=True, eq=False)

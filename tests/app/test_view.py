@@ -22,6 +22,7 @@ from app.view import (
     median_timings,
     readout_text,
     render_view,
+    stage_picture,
     stage_under,
     timings_markdown,
 )
@@ -66,10 +67,12 @@ def test_view_without_layers_shows_the_plain_frame() -> None:
 def test_every_layer_but_truth_is_an_overlay_and_every_stage_has_a_panel() -> None:
     assert set(OVERLAY_OF_LAYER) == set(Layers.names()) - {"truth"}
     assert set(OVERLAY_OF_LAYER.values()) == set(overlays.LAYERS)
+    drive = FakeDrive(frames=3)
+    result = ClientEngines(drive.camera).result("tab", drive, Params(), 2)
     for stage in ("motion_stereo", "symmetry", "pedestrians", "guard_rails"):
-        state = ViewState(frame=2, panels=Panels(stage=stage))
-        ((title, image),) = _view(FakeDrive(frames=3), state).panels
-        assert title == STAGE_TITLES[stage] and image.dtype == np.uint8 and image.shape[2] == 3
+        image = stage_picture(result, ViewState(frame=2, panels=Panels(stage=stage)))
+        assert stage in STAGE_TITLES and image is not None
+        assert image.dtype == np.uint8 and image.shape[2] == 3
 
 
 def test_a_result_of_another_frame_is_refused() -> None:
@@ -120,12 +123,17 @@ def test_a_scrub_back_takes_up_the_state_the_engine_kept() -> None:
 
 def test_only_the_stage_picture_shown_is_drawn_and_it_goes_under_the_camera() -> None:
     drive = FakeDrive(frames=3)
-    view = _view(drive, ViewState(frame=2, panels=Panels(stage="guard_rails")))
-    assert [title for title, _ in view.panels] == ["Guard rails"]
-    np.testing.assert_array_equal(view.with_stage, stage_under(view.image, view.panels[0][1]))
+    state = ViewState(frame=2, panels=Panels(stage="guard_rails"))
+    view = _view(drive, state)
+    result = ClientEngines(drive.camera).result("tab", drive, state.params, 2)
+    stage = stage_picture(result, state)
+    assert stage is not None
+    np.testing.assert_array_equal(view.with_stage, stage_under(view.image, stage))
     for nothing in ("timings", "none"):
-        alone = _view(drive, ViewState(frame=2, panels=Panels(stage=nothing)))
-        assert alone.panels == () and alone.with_stage is alone.image
+        state = ViewState(frame=2, panels=Panels(stage=nothing))
+        assert stage_picture(result, state) is None
+        alone = _view(drive, state)
+        assert alone.with_stage is alone.image
     assert _view(drive, ViewState(frame=2, panels=Panels(bird_eye=False))).bird_eyes == ()
     with pytest.raises(ValueError, match="stage: expected one of motion_stereo"):
         Panels(stage="everything")
