@@ -1,5 +1,6 @@
 """A tab's playback clock: a thread that steps the playhead once per period until stopped;
-and a pacer, for what follows the playhead less often than it moves."""
+a pacer, for what follows the playhead less often than it moves; and a rest, for what
+follows the view only once it stops changing."""
 
 from __future__ import annotations
 
@@ -58,3 +59,31 @@ class Pacer:
             return False
         self._last_s = now_s
         return True
+
+
+class Rest:
+    """Calls `action()` on a timer thread once `delay_s` seconds have passed since the last
+    `poke()`; pokes that come sooner put the call off again, so a burst of pokes ends in one
+    call. `cancel()` drops a call not yet made."""
+
+    def __init__(self, delay_s: float, action: Callable[[], None], name: str) -> None:
+        self.delay_s = delay_s
+        self.name = name
+        self._action = action
+        self._lock = threading.Lock()
+        self._timer: threading.Timer | None = None
+
+    def poke(self) -> None:
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+            self._timer = threading.Timer(self.delay_s, self._action)
+            self._timer.name = self.name
+            self._timer.daemon = True
+            self._timer.start()
+
+    def cancel(self) -> None:
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None

@@ -27,7 +27,7 @@ from app.metrics_panel import Evaluate, MetricsPanel
 from app.page_url import copy_page_url, read_page, show_query
 from app.param_sets import ParamSets, Sets
 from app.params_panel import NoticeColour, ParamsPanel
-from app.player import Pacer, Player
+from app.player import Pacer, Player, Rest
 from app.presets import PresetStore
 from app.state import Layers, Panels, ViewState
 from app.view import (
@@ -62,6 +62,11 @@ TIMINGS_WINDOW = 50  # frames in the running median of the stage timings
 # from decoding the pictures (the camera picture's caption carries the read-out of its own
 # frame). They show the playhead exactly again when playback stops.
 PLAYHEAD_PERIOD_S = 0.2
+# The page's URL follows the view once it has rested this long (and at once when a tab opens a
+# view or copies its link): the script that sets it is a message viser's page applies in its
+# 3D render loop, which then draws the scene for 250 ms, so one per seek or parameter change
+# held up the pictures of the next (headless Chromium without a GPU: 30-40 ms of each).
+LINK_REST_S = 0.5
 NOTICE_SECONDS = 8.0
 # (recording, kind, clip, state, progress) -> (file name, bytes): `app.clip_export.export_clip`
 Exporter = Callable[[str, str, Clip, ViewState, Callable[[int, int], None]], tuple[str, bytes]]
@@ -112,6 +117,7 @@ class ClientSession:
         self._can: CanSeries | None = None
         self._slider_pace = Pacer(PLAYHEAD_PERIOD_S)
         self._readout_pace = Pacer(PLAYHEAD_PERIOD_S)  # the read-out and the CAN plot
+        self._link_rest = Rest(LINK_REST_S, self._show_link, f"link-{client.client_id}")
         self._recent_timings: deque[StageTimings] = deque(maxlen=TIMINGS_WINDOW)
         self._history = History()  # parameter changes and annotation edits, one stack
         self._param_sets = ParamSets(presets, self._history, self._set_params)
@@ -263,6 +269,7 @@ class ClientSession:
             self._submit()
         else:
             self._open_link(link)
+        self._show_link()
 
     def link(self) -> ViewLink:
         """What this tab shows, as a view link."""
@@ -360,7 +367,7 @@ class ClientSession:
             self.notify("Clip not changed", f"clip frames: {err}")
             return
         self._set_clip(clip)
-        self._show_link()
+        self._link_rest.poke()
 
     def _set_clip(self, clip: Clip) -> None:
         self._clip = None if clip == (0, self._frame_count - 1) else clip
@@ -380,12 +387,14 @@ class ClientSession:
 
     def _show_link(self) -> None:
         """Make the page's URL carry this view (not while playing: it changes every frame)."""
-        if self._state.playing or self.recording is None:
-            return
-        query = link_query(self.link())
-        if query != self._shown_query:
+        with self._lock:
+            if self._state.playing or self.recording is None:
+                return
+            query = link_query(self.link())
+            if query == self._shown_query:
+                return
             self._shown_query = query
-            show_query(self.client, query)
+        show_query(self.client, query)
 
     def show_view(self, recording: str, view: FrameView) -> None:
         """Put a rendered frame and its read-out on the page together (if still wanted)."""
@@ -515,6 +524,7 @@ class ClientSession:
     def close(self) -> None:
         """The client left: stop playback."""
         self._player.stop()
+        self._link_rest.cancel()
 
     # --- internals ---------------------------------------------------------------------
     def _due(self, pace: Pacer) -> bool:
@@ -663,7 +673,7 @@ class ClientSession:
             request, state = self._request, self._state
         if request is not None:
             request(state)
-            self._show_link()
+            self._link_rest.poke()
 
     def _drop_drive(self) -> None:
         self.set_playing(False)

@@ -1,10 +1,11 @@
 """The presenter's layers and figures (app.presenter_view), its enlarged picture (app.draw),
-and the playback clock both kinds of tab use (app.player)."""
+and the playback clock, pacer and rest both kinds of tab use (app.player)."""
 
 from __future__ import annotations
 
 import dataclasses
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -12,7 +13,7 @@ from engine_frames import engine_result
 
 from app.draw import scaled_to_width
 from app.legend import legend_items
-from app.player import Pacer, Player
+from app.player import Pacer, Player, Rest
 from app.presenter_view import (
     HeadlineFigures,
     figures_markdown,
@@ -90,3 +91,26 @@ def test_the_pacer_says_yes_at_most_once_a_period(monkeypatch: pytest.MonkeyPatc
         answers.append(pace.due())
     # yes at 100.0; then 0.2 s after each yes: 100.2 and 100.41 (100.35 is 0.15 s after 100.2)
     assert answers == [True, False, False, True, False, True, True]
+
+
+def test_a_burst_of_pokes_ends_in_one_call_a_rest_after_the_last() -> None:
+    calls: list[float] = []
+    called = threading.Event()
+
+    def action() -> None:
+        calls.append(time.monotonic())
+        called.set()
+
+    rest = Rest(0.05, action, "test-rest")
+    for _ in range(5):
+        before_poke = time.monotonic()
+        rest.poke()
+        time.sleep(0.01)
+    assert called.wait(5.0)
+    time.sleep(0.2)  # no second call comes
+    assert len(calls) == 1 and calls[0] >= before_poke + 0.05
+
+    called.clear()
+    rest.poke()
+    rest.cancel()
+    assert not called.wait(0.2) and len(calls) == 1
