@@ -249,11 +249,17 @@ def test_geometry_refuses_an_offset_that_is_not_finite() -> None:
 
 
 class RecordingScene:
-    """A viser scene that keeps every handle its add_* methods return."""
+    """A viser scene that keeps every handle its add_* methods return, and the arguments of
+    its configure_default_lights calls."""
 
     def __init__(self, scene: viser.SceneApi) -> None:
         self._scene = scene
         self.added: list[viser.SceneNodeHandle] = []
+        self.lights: list[dict[str, Any]] = []
+
+    def configure_default_lights(self, **kwargs: Any) -> None:
+        self.lights.append(kwargs)
+        self._scene.configure_default_lights(**kwargs)
 
     def __getattr__(self, name: str) -> Any:
         attr = getattr(self._scene, name)
@@ -335,6 +341,7 @@ def test_scene_adds_its_fixed_nodes_once_and_updates_them_over_a_drive(
         counts.add((len(g.vehicle_centres_m), len(g.label_texts)))
     assert len(counts) > 2  # the drive made the pools grow and shrink
     assert recorder.handle("/bev/ground").format == "jpeg"
+    assert recorder.lights == [{"cast_shadow": False}]  # once, with the nodes
 
 
 def test_scene_shows_a_frame_where_its_geometry_says(recorder: RecordingScene) -> None:
