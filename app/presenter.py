@@ -120,6 +120,7 @@ class PresenterSession:
             if view.figures is not None:
                 self._figures.content = figures_markdown(view.figures)
             self._bird_eyes.show(view.bird_eyes, self._state.params)
+        self.client.flush()  # out at once, as the inspector's (app.session)
 
     def show_frame_error(self, recording: str, frame: int, what: str, message: str) -> None:
         if recording == self.recording:

@@ -418,6 +418,8 @@ class ClientSession:
             self._bird_eyes.show(view.bird_eyes, self._state.params)
             if readout:
                 self._readout.content = f"`{view.readout}`"
+        # out at once: viser otherwise sends the next batch up to 1/60 s after the one before
+        self.client.flush()
         if view.annotation is not None:
             self._annotation.show_frame(view.frame, *view.annotation)
 

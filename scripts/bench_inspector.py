@@ -411,10 +411,10 @@ def percentile(values: Sequence[float], q: float) -> float:
 class Latencies:
     """One kind of action: its latencies (ms, a miss is +inf), why each miss missed, and for
     the finished ones when the batch with the last pictures reached the page (ms after t0;
-    NaN when not seen)."""
+    NaN when not seen). A figure without a target (None) is for information."""
 
     name: str
-    target_p95_ms: float
+    target_p95_ms: float | None
     ms: list[float] = field(default_factory=list)
     miss_reasons: dict[str, int] = field(default_factory=dict)
     arrived_ms: list[float] = field(default_factory=list)
@@ -447,7 +447,7 @@ class Latencies:
             "p95_ms": p95,
             "max_ms": max(self.ms, default=math.nan),
             "target_p95_ms": self.target_p95_ms,
-            "passed": p95 <= self.target_p95_ms,
+            "passed": None if self.target_p95_ms is None else p95 <= self.target_p95_ms,
             # where the time of a finished action went (medians): until the pictures reached
             # the page (server, socket, viser's worker), then until they were decoded
             "to_page_p50_ms": percentile([a for a, _ in split], 50),
@@ -616,9 +616,13 @@ def timed(
 
 def type_value(box: Locator, text: str) -> None:
     """Put `text` in a number field as one edit, then Enter. viser sends a number field's
-    value on every change: typing "30" key by key would also ask for 3."""
+    value on every change: typing "30" key by key would also ask for 3. Enter is pressed on
+    the keyboard, not on the field's locator: a locator's press first checks in the page
+    that the field is the hit target, which kept the page's main thread busy for 20-40 ms
+    just when the server's answer came (seen in a Chromium trace: Playwright's DevTools
+    message before every answer), a delay no person's key press makes."""
     box.fill(text)
-    box.press("Enter")
+    box.page.keyboard.press("Enter")
 
 
 def seek(page: Page, box: Locator, frame: int, timeout_ms: float) -> dict[str, Any]:
@@ -679,7 +683,7 @@ def moves(
     preview of the frame when it has one, `FusionEngine.preview`), and until they show the
     exact result (the read-out no longer says preview)."""
     first = Latencies("parameter change -> panels", MOVE_P95_TARGET_MS)
-    exact = Latencies("  ... -> exact (replayed)", MOVE_P95_TARGET_MS)
+    exact = Latencies("  ... -> exact (replayed)", None)  # after the 0.15 s rest: no target
     select_stage(page, STAGE)
     box = parameter_field(page, *MOVE_PARAMETER)
     paper, other = move_values()
@@ -900,10 +904,11 @@ def format_report(summary: dict[str, Any], options: argparse.Namespace) -> str:
         f"{'target':<13} verdict",
     ]
     for lat in summary["latency"]:
+        target = "" if lat["target_p95_ms"] is None else f"p95 <= {lat['target_p95_ms']:g}"
         lines.append(
             f"{lat['name']:<30} {lat['count']:>5} {lat['misses']:>6} {_ms(lat['p50_ms']):>7} "
             f"{_ms(lat['p95_ms']):>7} {_ms(lat['max_ms']):>7}  "
-            f"{'p95 <= ' + format(lat['target_p95_ms'], 'g'):<13} {_verdict(lat['passed'])}"
+            f"{target:<13} {_verdict(lat['passed'])}"
         )
         for reason, n in lat["miss_reasons"].items():
             lines.append(f"    {n} missed: {reason}")
