@@ -675,7 +675,8 @@ class ClientSession:
             request, state = self._request, self._state
         if request is not None:
             request(state)
-            self._link_rest.poke()
+            if not state.playing:  # not while playing: stopping submits the frame again
+                self._link_rest.poke()
 
     def _drop_drive(self) -> None:
         self.set_playing(False)
