@@ -165,6 +165,27 @@ def test_a_wider_stage_picture_is_shrunk_to_the_camera_pictures_width() -> None:
     np.testing.assert_array_equal(below[:, 4:], draw.filled(3, 4, (30, 60, 120)))
 
 
+def test_a_one_pixel_line_stays_visible_in_a_stage_picture_shrunk_by_a_fifth() -> None:
+    camera = draw.filled(1, 8, (0, 0, 0))
+    stage = draw.filled(5, 10, (0, 0, 0))
+    stage[:, 5] = (200, 200, 200)  # a 1 px line, as the marks on the symmetry matrices
+    below = stage_under(camera, stage)[1 + STAGE_GAP_PX :]
+    assert below.shape == (4, 8, 3)
+    # bilinear: output column 4 samples input column 5.125, 7/8 of the way onto the line
+    assert (below[:, 4] >= 150).all() and (below[:, :3] == 0).all() and (below[:, 6:] == 0).all()
+
+
+def test_a_stage_picture_over_twice_as_wide_is_shrunk_by_area_averaging() -> None:
+    camera = draw.filled(1, 6, (0, 0, 0))
+    stage = draw.filled(4, 24, (0, 0, 0))
+    stage[:, 3::4] = (200, 200, 200)  # one bright column in four
+    below = stage_under(camera, stage)[1 + STAGE_GAP_PX :]
+    assert below.shape == (1, 6, 3)
+    # each output pixel averages four columns, one of them bright (bilinear would sample
+    # between columns 4k + 1 and 4k + 2 and miss every bright one)
+    np.testing.assert_array_equal(below, draw.filled(1, 6, (50, 50, 50)))
+
+
 def test_a_picture_that_is_not_rgb_is_refused_by_name() -> None:
     camera = draw.filled(5, 8, (0, 0, 0))
     with pytest.raises(ValueError, match=r"^stage: expected an \(H, W, 3\)"):
