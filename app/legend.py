@@ -30,7 +30,7 @@ SWATCH_INSET_PX = 4  # a box mark's top and bottom from its line's
 MARGIN_PX = draw.TEXT_MARGIN_PX
 MIN_WIDTH_PX = 16
 
-Mark = Literal["box", "cross", "line", "fill", "tag"]
+Mark = Literal["box", "cross", "line", "fill", "tag", "missed tag"]
 
 
 @dataclass(frozen=True)
@@ -66,9 +66,13 @@ LEGEND: Mapping[str, tuple[LegendItem, ...]] = {
     "strip": (LegendItem("fill", overlays.STRIP_GREY, "pedestrian search strip"),),
     "horizon": (LegendItem("line", draw.HORIZON_COLOUR, "horizon"),),
     "tracks": (LegendItem("tag", overlays.VEHICLE_COLOUR, "the same object followed over time"),),
+    "coasting": (
+        LegendItem("missed tag", overlays.VEHICLE_COLOUR, "followed, not seen in this frame"),
+    ),
     "truth": (LegendItem("box", draw.CLASS_COLOURS["car"], "ground truth"),),
 }
-TAG_TEXT = "#7"  # the "tag" mark: a track tag as `app.overlays.put_track_ids` draws it
+# the "tag" marks: a track's tag as `app.overlays.put_track_ids` draws it, seen this frame or not
+TAG_TEXTS: Mapping[Mark, str] = {"tag": "#7", "missed tag": "#7 ?"}
 
 
 def legend_items(layers: Layers) -> tuple[LegendItem, ...]:
@@ -83,8 +87,15 @@ def _text_width_px(text: str, font_scale: float) -> int:
     return int(w)
 
 
+def _mark_width_px(item: LegendItem) -> int:
+    """A mark's width: SWATCH_WIDTH_PX, or a tag's (its text and margins) when wider."""
+    if item.mark not in TAG_TEXTS:
+        return SWATCH_WIDTH_PX
+    return max(SWATCH_WIDTH_PX, _text_width_px(TAG_TEXTS[item.mark], overlays.TAG_FONT_SCALE) + 3)
+
+
 def _item_width_px(item: LegendItem) -> int:
-    return SWATCH_WIDTH_PX + SWATCH_GAP_PX + _text_width_px(item.words, LEGEND_FONT_SCALE)
+    return _mark_width_px(item) + SWATCH_GAP_PX + _text_width_px(item.words, LEGEND_FONT_SCALE)
 
 
 def legend_lines(items: Sequence[LegendItem], width_px: int) -> tuple[tuple[LegendItem, ...], ...]:
@@ -103,7 +114,7 @@ def legend_lines(items: Sequence[LegendItem], width_px: int) -> tuple[tuple[Lege
 
 
 def _draw_mark(out: draw.RgbImage, item: LegendItem, x: int, top: int) -> None:
-    """In place: `item`'s mark in the SWATCH_WIDTH_PX x LEGEND_LINE_PX cell at (x, top)."""
+    """In place: `item`'s mark in the `_mark_width_px` x LEGEND_LINE_PX cell at (x, top)."""
     x1 = x + SWATCH_WIDTH_PX - 1
     y_mid = top + LEGEND_LINE_PX // 2
     thick = draw.LINE_THICKNESS_PX
@@ -120,9 +131,10 @@ def _draw_mark(out: draw.RgbImage, item: LegendItem, x: int, top: int) -> None:
     elif item.mark == "line":
         cv2.line(out, (x, y_mid), (x1, y_mid), item.colour, thick)
     else:
-        (_, h), baseline = cv2.getTextSize(TAG_TEXT, draw.FONT, overlays.TAG_FONT_SCALE, 1)
+        text = TAG_TEXTS[item.mark]
+        (_, h), baseline = cv2.getTextSize(text, draw.FONT, overlays.TAG_FONT_SCALE, 1)
         bottom = y_mid + (h + baseline) // 2
-        draw.put_tag(out, TAG_TEXT, x, bottom, item.colour, font_scale=overlays.TAG_FONT_SCALE)
+        draw.put_tag(out, text, x, bottom, item.colour, font_scale=overlays.TAG_FONT_SCALE)
 
 
 def banner_strip(height_px: int, width_px: int) -> draw.RgbImage:
@@ -146,7 +158,7 @@ def legend_strip(layers: Layers, width_px: int) -> draw.RgbImage:
         x = MARGIN_PX
         for item in line:
             _draw_mark(out, item, x, top)
-            at = (x + SWATCH_WIDTH_PX + SWATCH_GAP_PX, top + (LEGEND_LINE_PX + text_h) // 2)
+            at = (x + _mark_width_px(item) + SWATCH_GAP_PX, top + (LEGEND_LINE_PX + text_h) // 2)
             cv2.putText(
                 out,
                 item.words,

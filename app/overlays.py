@@ -343,21 +343,25 @@ def put_pitch(out: RgbImage, pitch: PitchResult, camera: CameraModel) -> None:
 # --- tracks (core.tracking) -----------------------------------------------------------------
 
 
-def put_track_ids(out: RgbImage, tracks: Sequence[Track]) -> None:
-    """In place: a "#id" tag under the bottom-left corner of each track's last box, in the colour of
-    its kind (vehicles `VEHICLE_COLOUR`, pedestrians `PEDESTRIAN_COLOUR`); a track missed
-    this frame reads "#id ?" (its box is an older frame's). A tag that would cover one drawn
-    before goes under it. Guard-rail tracks are skipped.
+def put_track_ids(out: RgbImage, tracks: Sequence[Track], coasting: bool = False) -> None:
+    """In place: a "#id" tag under the bottom-left corner of the box of each track measured
+    this frame, in the colour of its kind (vehicles `VEHICLE_COLOUR`, pedestrians
+    `PEDESTRIAN_COLOUR`); with `coasting`, instead, a "#id ?" tag under the last box of each
+    track missed this frame (the box is an older frame's and is not drawn). Guard-rail
+    tracks are skipped.
+
+    The tags of all `tracks` are placed together, those measured first, so a tag that would
+    cover one placed before goes under it and a measured tag never moves for a missed one:
+    the two calls draw tags that do not overlap.
 
     tracks: e.g. `FrameResult.tracked_vehicles + FrameResult.tracked_pedestrians`.
     """
     require_rgb_image("out", out)
     (_, text_h), baseline = cv2.getTextSize("#0", FONT, TAG_FONT_SCALE, 1)
     tag_h = text_h + baseline
-    placed: list[tuple[int, int, int, int]] = []  # the tags drawn: (u0, v0, u1, v1)
-    for t in tracks:
-        if t.kind == "guard_rail":
-            continue
+    placed: list[tuple[int, int, int, int]] = []  # the tags placed: (u0, v0, u1, v1)
+    tagged = [t for t in tracks if t.kind != "guard_rail"]
+    for t in sorted(tagged, key=lambda t: t.misses > 0):  # stable: measured, then missed
         colour = VEHICLE_COLOUR if t.kind == "vehicle" else PEDESTRIAN_COLOUR
         u0, _, _, v1 = t.box_px
         text = f"#{t.id}" if t.misses == 0 else f"#{t.id} ?"
@@ -367,7 +371,8 @@ def put_track_ids(out: RgbImage, tracks: Sequence[Track]) -> None:
         while any(_overlap((u, bottom - tag_h, u + w + 2, bottom), p) for p in placed):
             bottom += tag_h + 1  # under the tag it would cover
         placed.append((u, bottom - tag_h, u + w + 2, bottom))
-        _tag(out, text, u, bottom, colour)
+        if (t.misses > 0) == coasting:
+            _tag(out, text, u, bottom, colour)
 
 
 def _overlap(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> bool:
@@ -421,6 +426,10 @@ def _tracks_layer(out: RgbImage, r: FrameResult) -> None:
     put_track_ids(out, r.tracked_vehicles + r.tracked_pedestrians)
 
 
+def _coasting_layer(out: RgbImage, r: FrameResult) -> None:
+    put_track_ids(out, r.tracked_vehicles + r.tracked_pedestrians, coasting=True)
+
+
 # In drawing order, back to front: the strip first, text last.
 LAYERS: Mapping[str, Layer] = {
     "pedestrian strip": _strip_layer,
@@ -433,6 +442,7 @@ LAYERS: Mapping[str, Layer] = {
     "vehicles": _vehicles_layer,
     "radar": _radar_layer,
     "tracks": _tracks_layer,
+    "coasting tracks": _coasting_layer,
 }
 
 

@@ -26,7 +26,8 @@ class Layers:
     pruned: bool = False  # pedestrian candidates the size and shape constraints dropped
     strip: bool = False  # the pedestrian search strip
     horizon: bool = True  # horizon, vanishing point and the pitch detector's lines
-    tracks: bool = True  # track ids
+    tracks: bool = True  # the ids of the tracks measured this frame
+    coasting: bool = True  # the ids of the tracks missed this frame ("#id ?"), at their last box
     truth: bool = False  # ground truth, when the drive has it
 
     @staticmethod
@@ -46,6 +47,7 @@ DEMO_LAYERS = Layers(
     strip=False,
     horizon=False,
     tracks=True,
+    coasting=False,  # a tag without a box, for someone who never read the papers
     truth=False,
 )
 

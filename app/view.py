@@ -61,6 +61,7 @@ OVERLAY_OF_LAYER = {
     "strip": "pedestrian strip",
     "horizon": "pitch",
     "tracks": "tracks",
+    "coasting": "coasting tracks",
 }
 
 

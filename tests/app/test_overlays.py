@@ -374,6 +374,33 @@ def test_tags_of_tracks_in_the_same_place_go_one_under_the_other() -> None:
     assert pedestrian_rows.min() > vehicle_rows.max()  # the second tag below the first
 
 
+def test_a_track_missed_this_frame_is_tagged_only_as_coasting() -> None:
+    seen = track("vehicle", (100.0, 200.0, 180.0, 260.0), id_=7)
+    missed = track("pedestrian", (400.0, 200.0, 420.0, 260.0), misses=2, id_=8)
+    measured = drawn(overlays.put_track_ids, black(), [seen, missed])
+    coasting = drawn(overlays.put_track_ids, black(), [seen, missed], True)
+    assert is_colour(measured[262:280, 100:130], overlays.VEHICLE_COLOUR).any()
+    assert not measured[:, 300:].any()  # no tag under the missed track's box
+    assert is_colour(coasting[262:280, 400:440], overlays.PEDESTRIAN_COLOUR).any()
+    assert not coasting[:, :300].any()  # the measured track's tag is the other layer's
+    # "#8 ?" is wider than "#8"
+    assert np.flatnonzero(coasting.any(axis=(0, 2))).max() > 400 + 20
+
+
+def test_a_missed_tag_goes_under_a_measured_one_in_the_same_place_whichever_layer_draws() -> None:
+    box = (100.0, 200.0, 180.0, 260.0)
+    tracks = [track("pedestrian", box, misses=1, id_=3), track("vehicle", box, id_=9)]
+    measured = drawn(overlays.put_track_ids, black(), tracks)
+    coasting = drawn(overlays.put_track_ids, black(), tracks, True)
+    measured_rows = np.flatnonzero(measured.any(axis=(1, 2)))
+    coasting_rows = np.flatnonzero(coasting.any(axis=(1, 2)))
+    assert measured_rows.size and coasting_rows.size
+    assert coasting_rows.min() > measured_rows.max()  # placed after the measured one
+    # the measured tag is where it is without the missed track
+    alone = drawn(overlays.put_track_ids, black(), tracks[1:])
+    np.testing.assert_array_equal(measured, alone)
+
+
 def test_guard_rail_tracks_get_no_tag() -> None:
     assert not drawn(
         overlays.put_track_ids, black(), [track("guard_rail", (1.0, 2.0, 30.0, 40.0))]

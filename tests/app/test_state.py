@@ -12,7 +12,7 @@ def test_state_starts_at_frame_zero_paused_with_the_papers_parameters() -> None:
     assert state.layers.radar and state.layers.vehicles and state.layers.horizon
     assert not state.layers.truth  # the engine's output first; truth on request
     assert state.params == Params()
-    assert Layers.names()[0] == "radar" and len(Layers.names()) == 11
+    assert Layers.names()[0] == "radar" and len(Layers.names()) == 12
 
 
 def test_negative_frame_is_refused() -> None:

@@ -34,7 +34,7 @@ def test_every_part_round_trips() -> None:
     query = link_query(link)
     assert parse_link_query(query) == (link, ())
     parts = parse_qs(query[1:], keep_blank_values=True)
-    on = "areas,vehicles,guardrails,pedestrians,rejected,horizon,tracks,truth"
+    on = "areas,vehicles,guardrails,pedestrians,rejected,horizon,tracks,coasting,truth"
     assert parts["layers"] == [on]
     assert parts["a.vehicle.search_width_m"] == [repr(2.0 / 3.0)]  # every digit of the float
     assert parts["b.tracking.confirm_frames"] == ["5"]
