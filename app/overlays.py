@@ -95,6 +95,7 @@ PEDESTRIAN_REASONS: Mapping[str, str] = {
     "aspect": "aspect",
     "motion_stereo": "motion",
     "vehicle": "vehicle",
+    "radar": "radar",
 }
 
 

@@ -284,9 +284,13 @@ def _pedestrian_runs(camera: CameraModel, pairs: Sequence[Pair], params: Params)
         vehicles = detect_vehicles(areas, now.radar, camera, params.vehicle).vehicles
         boxes = [v.box_px for v in vehicles]
 
-        def run(image=now.image, mask=motion.image_mask, row=motion.image_mask_first_row_px,
-                boxes=boxes) -> Callable[[], object]:  # fmt: skip
-            return lambda: detect_pedestrians(image, camera, mask, row, boxes, params.pedestrian)
+        def run(
+            image=now.image, mask=motion.image_mask, row=motion.image_mask_first_row_px,
+            boxes=boxes, radar=now.radar, speed=now.speed_mps,
+        ) -> Callable[[], object]:  # fmt: skip
+            return lambda: detect_pedestrians(
+                image, camera, mask, row, boxes, radar, speed, params.pedestrian
+            )
 
         runs.append(run)
     return runs

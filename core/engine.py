@@ -398,6 +398,8 @@ class FusionEngine:
                 motion.image_mask,
                 motion.image_mask_first_row_px,
                 boxes,
+                frame.radar,
+                frame.speed_mps,
                 p.pedestrian,
             )
         )

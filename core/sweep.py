@@ -763,7 +763,7 @@ def table(sweep: Sweep, ranked: Sequence[RankedSet], of: int) -> Table:
     notes = [
         "set: its id in the results file, a hash of every parameter value it runs with",
         "worst frames: recording:frame (errors: vehicle FN, RFN and FP, guard-rail FN and FP, "
-        "pedestrians missed and false after both filters)",
+        "pedestrians missed and false after the fusion filters)",
     ]
     if any(not r.complete for r in ranked):
         notes.append(

@@ -34,10 +34,12 @@ from .vehicles import Estimate, EventStats, FrameStats, FrameVehicles
 
 # the pedestrian outputs compared: the detector alone (its candidates that passed the size
 # and perspective constraints), after the motion-stereo filter, after the vehicle filter
+# (paper 000's output), after the radar filter (beyond the paper: the engine's output)
 PEDESTRIAN_STAGES: dict[str, tuple[Verdict, ...]] = {
     "symmetry": FUSION_VERDICTS,
-    "motion_stereo": ("pedestrian", "vehicle"),
-    "vehicles": ("pedestrian",),
+    "motion_stereo": ("pedestrian", "vehicle", "radar"),
+    "vehicles": ("pedestrian", "radar"),
+    "radar": ("pedestrian",),
 }
 
 Progress = Callable[[int, int], None]
@@ -89,10 +91,10 @@ class ErrorListing:
 
 def error_listings(r: RecordingReport) -> tuple[ErrorListing, ...]:
     """The errors of `r` by kind: vehicle FN, RFN and FP, guard-rail FN and FP (the vehicles
-    labelled guard rail are among the FP), pedestrians missed and false boxes after both
-    fusion filters. NVO are right answers and the tracked output repeats the detections'
-    frames, so neither is listed."""
-    final = r.pedestrians["vehicles"]
+    labelled guard rail are among the FP), pedestrians missed and false boxes after the
+    fusion filters (the engine's output). NVO are right answers and the tracked output
+    repeats the detections' frames, so neither is listed."""
+    final = r.pedestrians["radar"]
     return (
         ErrorListing("vehicle FN", "vehicle FN (truth id: frames)", r.vehicles.fn_at),
         ErrorListing("vehicle RFN", "vehicle RFN (truth id: frames)", r.vehicles.rfn_at),
@@ -101,11 +103,14 @@ def error_listings(r: RecordingReport) -> tuple[ErrorListing, ...]:
         ErrorListing("guard-rail FP", "guard-rail FP (radar target: frames)", r.guardrails.fp_at),
         ErrorListing(
             "pedestrian FN",
-            "pedestrians missed after both filters (truth id: frames)",
+            "pedestrians missed after the fusion filters (truth id: frames)",
             final.missed_at,
         ),
         ErrorListing(
-            "pedestrian FP", "pedestrian FP after both filters (frames)", final.false_at, False
+            "pedestrian FP",
+            "pedestrian FP after the fusion filters (frames)",
+            final.false_at,
+            False,
         ),
     )
 

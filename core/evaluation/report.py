@@ -4,7 +4,7 @@
 with <figures> = {"frames", "vehicles": {"frames": {rd, fn, rfn, fp, nvo, framed, and where
 each FN, RFN, FP, NVO happened as [frame, id] pairs}, "events": {events, radar_miss,
 not_refined, refined, refined_share, refined_share_of_radar_supplied}}, "guardrails",
-"pedestrians" (per filter: symmetry, motion_stereo, vehicles), "motion_stereo", "pitch",
+"pedestrians" (per filter: symmetry, motion_stereo, vehicles, radar), "motion_stereo", "pitch",
 "tracking", and with --baselines "baselines": {"pedestrians", "pitch", "motion_stereo"},
 each the baseline beside the engine's figure with their median ms per frame}; shares are
 fractions 0-1 (null when undefined). The total carries counts only; frame listings stay
@@ -38,6 +38,7 @@ PEDESTRIAN_TITLES = {
     "symmetry": "symmetry alone",
     "motion_stereo": "+ motion stereo",
     "vehicles": "+ vehicles",
+    "radar": "+ radar (beyond)",
 }
 
 

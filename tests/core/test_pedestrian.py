@@ -7,6 +7,7 @@ box, and the camera gives where a box's base meets the road.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from functools import cache
 
@@ -14,6 +15,7 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 
+from core.io.frame import RadarTarget
 from core.params import PedestrianParams
 from core.pedestrian import PedestrianResult, bands_for, detect_pedestrians
 from core.synth.scene import Pedestrian, StaticObject, Trajectory
@@ -58,9 +60,17 @@ def _detect(
     mask_value: int = 255,
     vehicles: tuple[Box, ...] = (),
     params: PedestrianParams = PARAMS,
+    radar: tuple[RadarTarget, ...] = (),
+    ego_speed_mps: float = 0.0,
 ) -> PedestrianResult:
     first, _ = camera().row_window_px
-    return detect_pedestrians(image, camera(), _mask(mask_value), first, vehicles, params)
+    return detect_pedestrians(
+        image, camera(), _mask(mask_value), first, vehicles, radar, ego_speed_mps, params
+    )
+
+
+def _target(x_m: float, y_m: float, range_rate_mps: float) -> RadarTarget:
+    return RadarTarget(math.hypot(x_m, y_m), math.atan2(y_m, x_m), range_rate_mps, 1.0, x_m, y_m)
 
 
 def _on(result: PedestrianResult, box: Box) -> list[str]:
@@ -142,6 +152,34 @@ def test_a_person_inside_a_detected_vehicle_is_rejected_with_that_reason() -> No
     ]
 
 
+def test_a_person_where_radar_sees_a_fast_target_is_rejected_with_that_reason() -> None:
+    image, labels = _scene("person")
+    (found,) = _detect(image).kept
+    d, y = found.distance_m, found.lateral_m
+    gate_d = PARAMS.radar_gate_distance_fraction * d
+    fast, jog = PARAMS.radar_min_speed_mps + 5.0, PARAMS.radar_min_speed_mps - 0.5
+
+    def verdicts(radar: tuple[RadarTarget, ...], **kwargs: object) -> list[str]:
+        return _on(_detect(image, radar=radar, **kwargs), _truth_box(labels))  # type: ignore[arg-type]
+
+    # a target receding at `fast` from a standing car, by the person's base within both gates
+    near = _target(d + 0.9 * gate_d, y + 0.9 * PARAMS.radar_gate_lateral_m, fast)
+    assert verdicts((near,)) == ["radar"]
+    # the ego speed counts: a target closing at the car's own speed stands still
+    assert verdicts((_target(d, y, -10.0),), ego_speed_mps=10.0) == ["pedestrian"]
+    assert verdicts((_target(d, y, fast - 10.0),), ego_speed_mps=10.0) == ["radar"]
+    # kept: too slow, outside a gate, the car's speed unknown, the filter off
+    assert verdicts((_target(d, y, jog),)) == ["pedestrian"]
+    assert verdicts((_target(d + 1.1 * gate_d, y, fast),)) == ["pedestrian"]
+    assert verdicts((_target(d, y - 1.1 * PARAMS.radar_gate_lateral_m, fast),)) == ["pedestrian"]
+    assert verdicts((near,), ego_speed_mps=math.nan) == ["pedestrian"]
+    off = replace(PARAMS, radar_gate_lateral_m=0.0)
+    assert verdicts((near,), params=off) == ["pedestrian"]
+    # the paper's filters come first: a box in a vehicle's stays the vehicle filter's
+    u0, v0, u1, v1 = _truth_box(labels)
+    assert verdicts((near,), vehicles=((u0 - 20, v0 - 10, u1 + 20, v1 + 5),)) == ["vehicle"]
+
+
 def test_an_empty_road_has_no_pedestrian() -> None:
     image, _ = _scene("empty")
     assert not _detect(image).kept
@@ -182,11 +220,12 @@ def test_bad_inputs_name_the_argument() -> None:
     image, _ = _scene("person")
     first, _ = camera().row_window_px
     with pytest.raises(ValueError, match="image"):
-        detect_pedestrians(image[:100], camera(), _mask(255), first, (), PARAMS)
+        detect_pedestrians(image[:100], camera(), _mask(255), first, (), (), 0.0, PARAMS)
     with pytest.raises(ValueError, match="obstacle_mask"):
-        detect_pedestrians(image, camera(), _mask(255)[:, :100], first, (), PARAMS)
+        detect_pedestrians(image, camera(), _mask(255)[:, :100], first, (), (), 0.0, PARAMS)
     with pytest.raises(ValueError, match="obstacle_mask"):
-        detect_pedestrians(image, camera(), _mask(255).astype(np.float32), first, (), PARAMS)  # type: ignore[arg-type]
+        float_mask = _mask(255).astype(np.float32)
+        detect_pedestrians(image, camera(), float_mask, first, (), (), 0.0, PARAMS)  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(
@@ -197,6 +236,9 @@ def test_bad_inputs_name_the_argument() -> None:
         ("max_candidates", 0),
         ("gap_fraction", 1.5),
         ("aspect_max", 0.1),
+        ("radar_min_speed_mps", 0.0),
+        ("radar_gate_lateral_m", -1.0),
+        ("radar_gate_distance_fraction", 1.5),
     ],
 )
 def test_bad_parameters_name_the_field(field: str, value: object) -> None:
