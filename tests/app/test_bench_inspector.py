@@ -50,9 +50,11 @@ def test_tiny_run_prints_finite_figures_and_stops_its_server(
     assert [lat["count"] for lat in summary["latency"]] == [3, 3, 3]
     # a miss would print as null (no latency): every action finished
     assert all(math.isfinite(x) for x in numbers(summary["latency"])), summary["latency"]
-    # one tab (its Camera and Motion stereo tabs), two with one idle, both playing (+ mean)
-    assert len(summary["playback"]) == 4  # one tab; with the others idle; all playing (2)
+    # at 4x: one tab, two with one idle, both playing (+ mean); both playing at 1x (+ mean)
+    assert len(summary["playback"]) == 6
     assert all(math.isfinite(p["fps"]) and p["fps"] >= 0 for p in summary["playback"])
+    real_time = [p for p in summary["playback"] if "at 1x" in p["name"]]
+    assert [p["target_fps"] for p in real_time] == [0.9 * summary["frame_rate_hz"], None]
     assert all(v > 0 for v in summary["memory"]["rss_kib"].values())
     assert math.isfinite(summary["memory"]["growth_pct"])
 
