@@ -60,7 +60,8 @@ def errors() -> RecordingReport:
         pedestrians={
             **r.pedestrians,
             "symmetry": BoxScore(missed_at=((70, 1),)),  # before the fusion filters
-            "vehicles": BoxScore(missed_at=((40, 7),), false_at=((37, 0), (61, 0), (37, 1))),
+            "vehicles": BoxScore(missed_at=((70, 1),)),  # before the radar filter
+            "radar": BoxScore(missed_at=((40, 7),), false_at=((37, 0), (61, 0), (37, 1))),
         },
         tracking=dataclasses.replace(
             r.tracking, vehicles=dataclasses.replace(empty(FrameStats), fn_at=((80, 3),))
@@ -175,7 +176,7 @@ def test_a_negative_label_limit_is_refused() -> None:
 
 def listed(r: RecordingReport) -> dict[str, set[int]]:
     """The frames of each kind of error, read from the report's fields."""
-    after_filters = r.pedestrians["vehicles"]
+    after_filters = r.pedestrians["radar"]
     at = {
         "vehicle FN": r.vehicles.fn_at,
         "vehicle RFN": r.vehicles.rfn_at,
