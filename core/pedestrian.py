@@ -213,10 +213,6 @@ class PedestrianResult:
         return self.with_verdict("vehicle")
 
     @property
-    def rejected_by_radar(self) -> tuple[PedestrianCandidate, ...]:
-        return self.with_verdict("radar")
-
-    @property
     def pruned(self) -> tuple[PedestrianCandidate, ...]:
         """Candidates the size and perspective constraints removed (step 4)."""
         return self.with_verdict(*CONSTRAINT_VERDICTS)
@@ -591,7 +587,7 @@ def _inside_vehicle(box: Box, vehicle_boxes_px: Sequence[Box], fraction: float) 
     return any(intersection_area(box, v) / area > fraction for v in vehicle_boxes_px)
 
 
-def moving_targets_m(
+def _moving_targets_m(
     targets: Sequence[RadarTarget], ego_speed_mps: float, params: PedestrianParams
 ) -> FloatArray:
     """(N, 2) float64 (x_m, y_m) in the vehicle frame of the radar targets moving over ground
@@ -720,7 +716,7 @@ def detect_pedestrians(
     ]
 
     # 5. fusion, in the paper's order, then radar (beyond the paper)
-    moving_m = moving_targets_m(radar_targets, ego_speed_mps, params)
+    moving_m = _moving_targets_m(radar_targets, ego_speed_mps, params)
     candidates = []
     columns = zip(
         chosen.tolist(),
