@@ -486,15 +486,14 @@ class Playback:
         return Playback(name, fps, frames, seconds, int(counted["restarts"]), target_fps)
 
     def summary(self) -> dict[str, Any]:
-        target = self.target_fps
         return {
             "name": self.name,
             "fps": self.fps,
             "frames": self.frames,
             "seconds": self.seconds,
             "restarts": self.restarts,
-            "target_fps": target,
-            "passed": None if target is None else self.fps >= target,
+            "target_fps": self.target_fps,
+            "passed": None if self.target_fps is None else self.fps >= self.target_fps,
         }
 
 
