@@ -54,7 +54,8 @@ class SearchArea:
     box_px: (col0, row0, col1, row1) integer pixel bounds after cropping (end exclusive), so
     the crop is `image[row0:row1, col0:col1]`; y_left_m, y_right_m: the area's sides in the
     world (vehicle frame), at the target's x_m; patch: (h, w) uint8 grey, the crop resampled;
-    px_per_m: patch pixels per metre across at the target's distance.
+    px_per_m: patch pixels per metre across at the target's distance. The patch is an array of
+    its own (C-contiguous, writable), never a view of the image.
     """
 
     target_index: int
@@ -147,8 +148,10 @@ def search_areas(
         scale = min(1.0, params.resampled_width_px / width_px)
         size = (max(1, round((c1 - c0) * scale)), max(1, round((r1 - r0) * scale)))
         crop = image[r0:r1, c0:c1]
+        # always a C-contiguous array of its own: the compiled searches then have one
+        # signature, loaded once from numba's cache instead of twice
         patch: npt.NDArray[np.uint8] = (
-            crop
+            crop.copy()
             if scale == 1.0
             else np.asarray(cv2.resize(crop, size, interpolation=cv2.INTER_LINEAR))
         )

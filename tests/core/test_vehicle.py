@@ -88,6 +88,19 @@ def test_far_areas_are_not_enlarged_and_border_areas_are_cropped() -> None:
     assert a.patch.shape[1] == round(a.box_px[2] * 64 / width_px)  # same scale as uncropped
 
 
+def test_a_kept_patch_is_a_copy_of_the_crop_not_a_view_of_the_image() -> None:
+    # the compiled searches get one array layout (C-contiguous, writable), resampled or not
+    cam = flat_camera()
+    image = np.arange(480 * 640, dtype=np.uint32).reshape(480, 640).astype(np.uint8)
+    image.flags.writeable = False  # as a drive's frames are
+    far, near = search_areas(image, cam, (target(50.0, 0.0), target(25.0, 0.0)), PARAMS)
+    c0, r0, c1, r1 = far.box_px
+    np.testing.assert_array_equal(far.patch, image[r0:r1, c0:c1])
+    for area in (far, near):
+        assert area.patch.flags.c_contiguous and area.patch.flags.writeable
+        assert not np.shares_memory(area.patch, image)
+
+
 def test_targets_outside_the_image_get_no_area() -> None:
     cam = flat_camera()
     image = np.zeros((480, 640), dtype=np.uint8)
