@@ -31,10 +31,10 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
-import viser
 
 from app.draw import Rgb, RgbImage, require_rgb_image
 from app.overlays import (
@@ -47,6 +47,9 @@ from app.panels import VEHICLE_FOOTPRINT_LENGTH_M, bird_eye_extent_m
 from core.engine import FrameResult
 from core.params import Params
 from core.tracking import Kind
+
+if TYPE_CHECKING:  # only annotations name viser: the video export does without importing it
+    import viser
 
 FloatArray = npt.NDArray[np.float64]
 ColourArray = npt.NDArray[np.uint8]
