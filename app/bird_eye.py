@@ -44,6 +44,7 @@ from app.overlays import (
     radar_colour,
 )
 from app.panels import VEHICLE_FOOTPRINT_LENGTH_M, bird_eye_extent_m
+from app.state import INSPECTOR_LAYERS, Layers
 from core.engine import FrameResult
 from core.params import Params
 from core.tracking import Kind
@@ -136,23 +137,26 @@ def _colours(rows: list[Rgb]) -> ColourArray:
 
 
 def bird_eye_geometry(
-    result: FrameResult, params: Params, offset_y_m: float = 0.0
+    result: FrameResult, params: Params, offset_y_m: float = 0.0, layers: Layers = INSPECTOR_LAYERS
 ) -> BirdEyeGeometry:
     """The bird's-eye geometry of one engine frame (see `BirdEyeGeometry`).
 
     result: the frame; params: the parameters it was computed with (the ground texture
-    covers `bird_eye_extent_m(params.motion_stereo)`); offset_y_m: added to every y.
-    ValueError when offset_y_m is not finite.
+    covers `bird_eye_extent_m(params.motion_stereo)`); offset_y_m: added to every y; layers:
+    the camera's layers, of which the view follows four: `radar` (the markers), `vehicles`
+    (the boxes), `tracks` (trail and label of each track measured this frame) and
+    `coasting` (those of the tracks missed this frame). ValueError when offset_y_m is not
+    finite.
     """
     if not math.isfinite(offset_y_m):
         raise ValueError(f"offset_y_m: expected a finite number of metres, got {offset_y_m}")
     dy = offset_y_m
 
-    targets = result.vehicle.targets
+    targets = result.vehicle.targets if layers.radar else ()
     radar_points = _points([(t.target.x_m, t.target.y_m + dy, RADAR_MARKER_Z_M) for t in targets])
     radar_colours = _colours([radar_colour(t.verdict) for t in targets])
 
-    vehicles = result.vehicle.vehicles
+    vehicles = result.vehicle.vehicles if layers.vehicles else ()
     length, height = VEHICLE_FOOTPRINT_LENGTH_M, VEHICLE_HEIGHT_M
     centres = _points([(v.distance_m + length / 2, v.lateral_m + dy, height / 2) for v in vehicles])
     sizes = _points([(length, v.width_m, height) for v in vehicles])
@@ -162,6 +166,8 @@ def bird_eye_geometry(
     labels: list[tuple[float, float, float]] = []
     texts: list[str] = []
     for track in result.tracking.confirmed:
+        if not (layers.coasting if track.misses else layers.tracks):
+            continue
         steps = zip(track.history_m[:-1], track.history_m[1:], strict=True)
         for (x0, y0), (x1, y1) in steps:
             segments.append(((x0, y0 + dy, TRACK_LINE_Z_M), (x1, y1 + dy, TRACK_LINE_Z_M)))

@@ -44,7 +44,7 @@ def export_clip(
         name = f"{drive.name}-{first}-{last}.{kind}"
         if kind == "html":
             html = bird_eye_snapshot_html(
-                drive, first, last, state.params, state.params_b, progress
+                drive, first, last, state.params, state.params_b, progress, state.layers
             )
             return name, html.encode("utf-8")
         out = Path(folder) / name

@@ -29,7 +29,7 @@ from app.param_sets import ParamSets, Sets
 from app.params_panel import NoticeColour, ParamsPanel
 from app.player import Pacer, Player, Rest
 from app.presets import PresetStore
-from app.state import Layers, Panels, ViewState
+from app.state import INSPECTOR_LAYERS, Layers, Panels, ViewState
 from app.view import (
     CAN_WINDOW_HALF_S,
     OVERLAY_OF_LAYER,
@@ -289,7 +289,7 @@ class ClientSession:
                 "Clip left out", f"clip: expected frames up to {last}, got {clip}", "yellow"
             )
         for name, box in self._layer_boxes.items():
-            box.value = getattr(link.layers or Layers(), name)  # type: ignore[misc]
+            box.value = getattr(link.layers or INSPECTOR_LAYERS, name)  # type: ignore[misc]
         panels = link.panels or Panels()
         for name, box in self._panel_boxes.items():
             box.value = getattr(panels, name)  # type: ignore[misc]

@@ -35,6 +35,7 @@ import viser
 
 from app.bird_eye import BirdEyeGeometry, BirdEyeScene, pose_of_views
 from app.draw import RgbImage
+from app.state import DEMO_LAYERS, Layers
 from app.view import NS_PER_S, FrameSource, b_offset_y_m, bird_eye_view, check_clip
 from core.engine import FusionEngine
 from core.params import Params
@@ -64,10 +65,12 @@ def bird_eye_snapshot_html(
     params: Params,
     params_b: Params | None = None,
     progress: Callable[[int, int], None] | None = None,
+    layers: Layers = DEMO_LAYERS,
 ) -> str:
     """The self-contained HTML page playing the bird's-eye view of frames first_frame ..
     last_frame (inclusive) of `drive` under `params`, and under `params_b` beside it when
-    given (as the inspector's A/B compare places it: `app.view.b_offset_y_m`).
+    given (as the inspector's A/B compare places it: `app.view.b_offset_y_m`), drawing what
+    `layers` says (`app.bird_eye.bird_eye_geometry`; by default a demo's, as a video's).
 
     Each frame is what the inspector shows when it plays the drive: an engine per set seeks
     to `first_frame` (replaying up to `core.engine.replay_window` frames before it) and
@@ -85,7 +88,7 @@ def bird_eye_snapshot_html(
         serializer = server.get_scene_serializer()
         scenes = (BirdEyeScene(server.scene, PREFIX_A), BirdEyeScene(server.scene, PREFIX_B))
         for done, index in enumerate(range(first_frame, last_frame + 1), start=1):
-            views = _views(engines, drive, index)
+            views = _views(engines, drive, index, layers)
             for scene, (geometry, texture) in zip(scenes, views, strict=False):
                 scene.show(geometry, texture)
             if index == first_frame:
@@ -99,12 +102,15 @@ def bird_eye_snapshot_html(
         server.stop()
 
 
-def _views(engines: list[FusionEngine], drive: FrameSource, index: int) -> list[BirdEyeView]:
+def _views(
+    engines: list[FusionEngine], drive: FrameSource, index: int, layers: Layers
+) -> list[BirdEyeView]:
     """Frame `index`'s bird's-eye view under each engine's parameters, B beside A."""
     views = []
     for k, engine in enumerate(engines):
         offset_y_m = 0.0 if k == 0 else b_offset_y_m(engines[0].params)
-        views.append(bird_eye_view(engine.seek(drive, index), engine.params, offset_y_m))
+        result = engine.seek(drive, index)
+        views.append(bird_eye_view(result, engine.params, layers, offset_y_m))
     return views
 
 

@@ -14,7 +14,8 @@ from core.params import Params
 
 @dataclass(frozen=True)
 class Layers:
-    """Which overlays are drawn on the camera image."""
+    """Which overlays are drawn on the camera image; the bird's-eye view follows radar,
+    vehicles, tracks and coasting (`app.bird_eye.bird_eye_geometry`)."""
 
     radar: bool = True  # radar crosses, coloured by what each target did
     areas: bool = False  # the search areas of the radar targets
@@ -34,6 +35,8 @@ class Layers:
     def names() -> tuple[str, ...]:
         return tuple(f.name for f in fields(Layers))
 
+
+INSPECTOR_LAYERS = Layers()  # what the inspector opens with
 
 # what a demo draws (the presenter, an exported video): what was found, not how
 DEMO_LAYERS = Layers(

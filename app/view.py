@@ -186,10 +186,10 @@ def render_view(
         picture = draw.add_caption(picture, text)
     bird_eyes: tuple[tuple[BirdEyeGeometry, draw.RgbImage], ...] = ()
     if state.panels.bird_eye:
-        bird_eyes = (bird_eye_view(result, state.params),)
+        bird_eyes = (bird_eye_view(result, state.params, state.layers),)
         if result_b is not None and state.params_b is not None:
             offset = b_offset_y_m(state.params)
-            bird_eyes += (bird_eye_view(result_b, state.params_b, offset),)
+            bird_eyes += (bird_eye_view(result_b, state.params_b, state.layers, offset),)
     annotation = None
     if state.annotating:
         annotation = (draw.grey_to_rgb(frame.image), seeds(result))
@@ -221,11 +221,12 @@ def seeds(result: FrameResult) -> Seeds:
 
 
 def bird_eye_view(
-    result: FrameResult, params: Params, offset_y_m: float = 0.0
+    result: FrameResult, params: Params, layers: Layers, offset_y_m: float = 0.0
 ) -> tuple[BirdEyeGeometry, draw.RgbImage]:
-    """The 3D bird's-eye view of `result`: its geometry and the bird's-eye image as texture."""
+    """The 3D bird's-eye view of `result` under `layers`: its geometry and the bird's-eye
+    image as texture."""
     texture = draw.grey_to_rgb(result.motion_stereo.bird_eye)
-    return bird_eye_geometry(result, params, offset_y_m), texture
+    return bird_eye_geometry(result, params, offset_y_m, layers), texture
 
 
 def b_offset_y_m(params: Params) -> float:

@@ -25,6 +25,7 @@ from app.bird_eye import (
     top_down_view,
 )
 from app.draw import grey_to_rgb
+from app.state import DEMO_LAYERS, Layers
 from core.cli import DEFAULT_RECORDINGS
 from core.engine import FrameResult, FusionEngine
 from core.io.drive import Drive
@@ -161,6 +162,31 @@ def test_tracks_of_every_kind_are_drawn_in_their_colour_tentative_ones_are_not()
         g.track_colours, [overlays.PEDESTRIAN_COLOUR, overlays.GUARD_RAIL_LINE_COLOUR]
     )
     assert g.label_texts == ("#3", "#4 ?", "#6")  # "?": missed this frame, as on the camera
+
+
+def test_the_view_follows_the_camera_layers_of_what_it_draws() -> None:
+    result = frame(
+        [target("vehicle", 20.0, 1.0)],
+        [car(20.0, 1.0, 1.6)],
+        [
+            track(3, "vehicle", ((18.0, 1.0), (20.0, 1.0))),
+            track(4, "pedestrian", ((8.0, -2.0), (8.5, -2.0)), misses=1),
+        ],
+    )
+    everything = bird_eye_geometry(result, PARAMS)  # the inspector's layers: all four on
+    assert len(everything.radar_points_m) == len(everything.vehicle_centres_m) == 1
+    assert everything.label_texts == ("#3", "#4 ?")
+    demo = bird_eye_geometry(result, PARAMS, layers=DEMO_LAYERS)  # a demo hides "#4 ?"
+    assert demo.label_texts == ("#3",)
+    np.testing.assert_array_equal(demo.track_colours, [overlays.VEHICLE_COLOUR])
+    only_coasting = Layers(radar=False, vehicles=False, tracks=False, coasting=True)
+    g = bird_eye_geometry(result, PARAMS, layers=only_coasting)
+    assert g.label_texts == ("#4 ?",) and len(g.track_segments_m) == 1
+    assert g.radar_points_m.shape == (0, 3) and g.vehicle_centres_m.shape == (0, 3)
+    none = Layers(**{name: False for name in Layers.names()})
+    g = bird_eye_geometry(result, PARAMS, layers=none)
+    assert g.label_texts == () and g.track_segments_m.shape == (0, 2, 3)
+    assert g.ego_size_m.shape == (3,)  # the ego car and the ground stay
 
 
 def test_empty_frame_gives_empty_arrays_of_the_documented_shapes() -> None:

@@ -30,6 +30,7 @@ from playwright.sync_api import Page
 from app import bird_eye, snapshot
 from app.bird_eye import BirdEyeGeometry, top_down_pose
 from app.snapshot import bird_eye_snapshot_html, clip_duration_s
+from app.state import DEMO_LAYERS
 from app.view import b_offset_y_m, bird_eye_view
 from core.cli import main
 from core.engine import FusionEngine
@@ -154,9 +155,11 @@ def stamps_s(drive_path: Path, first: int, last: int) -> list[float]:
 
 
 def engine_view(drive_path: Path, index: int, params: Params = PARAMS) -> BirdEyeGeometry:
-    """What the inspector shows of frame `index`: `FusionEngine.seek` to it."""
+    """What the inspector shows of frame `index` with a demo's layers (a snapshot's default):
+    `FusionEngine.seek` to it."""
     with Drive(drive_path) as drive:
-        return bird_eye_view(FusionEngine(params, drive.camera).seek(drive, index), params)[0]
+        result = FusionEngine(params, drive.camera).seek(drive, index)
+    return bird_eye_view(result, params, DEMO_LAYERS)[0]
 
 
 # --- fixtures -------------------------------------------------------------------------------
@@ -267,7 +270,7 @@ def test_clip_frames_are_what_the_inspector_shows_after_the_frames_before_are_re
     assert engine_view(drive_path, FIRST).label_texts
     with Drive(drive_path) as drive:
         cold = FusionEngine(PARAMS, drive.camera).process(drive.frame(FIRST))
-    assert not bird_eye_view(cold, PARAMS)[0].label_texts
+    assert not bird_eye_view(cold, PARAMS, DEMO_LAYERS)[0].label_texts
 
 
 def test_same_clip_gives_the_same_page(page_html: str, drive_path: Path) -> None:
