@@ -423,6 +423,12 @@ class TrackingParams:
     unknown_ego_sigma_m: float = 2.0
     # filtered positions kept per track, this frame's included (chosen: 3 s at 10 fps)
     history_length: int = 30
+    # a pedestrian track is ended once its speed over the ground is above this by more than
+    # pedestrian_speed_gate_sigmas of the speed's sigma: a "person" moving with the traffic
+    # is a part of a vehicle (chosen: a jog, as pedestrian.radar_min_speed_mps; the margin
+    # keeps a person seen far away, whose distance is noisy, from seeming to run)
+    pedestrian_max_speed_mps: float = 3.0
+    pedestrian_speed_gate_sigmas: float = 2.0
 
     def __post_init__(self) -> None:
         _check(self.confirm_frames >= 1, "confirm_frames", "an integer >= 1", self.confirm_frames)
@@ -445,8 +451,14 @@ class TrackingParams:
             "pedestrian_min_sigma_x_m",
             "width_sigma_m",
             "initial_velocity_sigma_mps",
+            "pedestrian_max_speed_mps",
         )
-        for name in ("guard_rail_accel_psd_m2ps3", "width_walk_m2ps", "unknown_ego_sigma_m"):
+        for name in (
+            "guard_rail_accel_psd_m2ps3",
+            "width_walk_m2ps",
+            "unknown_ego_sigma_m",
+            "pedestrian_speed_gate_sigmas",
+        ):
             value = getattr(self, name)
             _check(math.isfinite(value) and value >= 0, name, "a number >= 0", value)
         _check(self.history_length >= 1, "history_length", "an integer >= 1", self.history_length)

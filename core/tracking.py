@@ -34,8 +34,14 @@ filter (a random walk).
    measured, speed 0 with sigma `initial_velocity_sigma_mps`, id = the next integer). A track
    is confirmed once it has `confirm_frames` hits and stays confirmed. A tentative track is
    dropped at its first miss, so a one-frame false positive is never confirmed; a confirmed
-   track is dropped at its (`max_missed_frames` + 1)-th consecutive miss. Dropped ids are
-   listed in `TrackResult.ended` and never reused (until `Tracker.reset`).
+   track is dropped at its (`max_missed_frames` + 1)-th consecutive miss. A pedestrian
+   track whose speed over the ground |v| is surely above a person's,
+       |v| - `pedestrian_speed_gate_sigmas` sigma_v > `pedestrian_max_speed_mps`,
+   sigma_v = sqrt(v^T C v) / |v|, C the velocity block of P, is tentative from then on: a
+   "person" keeping pace with the traffic is a part of a vehicle (its wheels, its side),
+   whose boxes would otherwise draw a track moving at highway speed. It keeps taking that
+   object's detections, so they start no new track, until its first miss ends it. Dropped
+   ids are listed in `TrackResult.ended` and never reused (until `Tracker.reset`).
 
 `Tracker.state()` and `Tracker.restore(state)` keep and take up the tracks and the next id
 (a seek back to a frame whose state was kept).
@@ -327,6 +333,7 @@ class _TrackState:
         self.box_px = m.box_px
         self.hits, self.misses, self.age = 1, 0, 1
         self.confirmed = self.hits >= params.confirm_frames
+        self.too_fast = False  # a pedestrian track that moved surely faster than a person
         self.source_index: int | None = m.source_index
         self.history_m: tuple[tuple[float, float], ...] = ((self.x, self.y),)
 
@@ -435,8 +442,27 @@ class _TrackState:
         self.box_px = m.box_px
         self.hits += 1
         self.misses = 0
-        self.confirmed = self.confirmed or self.hits >= params.confirm_frames
+        self.confirmed = not self.too_fast and (
+            self.confirmed or self.hits >= params.confirm_frames
+        )
         self.source_index = m.source_index
+
+    def surely_faster_than(self, speed_mps: float, sigmas: float) -> bool:
+        """Whether the speed over the ground |v| is above speed_mps by more than `sigmas`
+        of its sigma, sqrt(v^T C v) / |v| (C: the velocity block of P)."""
+        speed = math.hypot(self.vx, self.vy)
+        if speed <= speed_mps:
+            return False
+        c00, c01, c11 = self.P[7], self.P[8], self.P[9]
+        ux, uy = self.vx / speed, self.vy / speed
+        sigma = math.sqrt(max(ux * ux * c00 + 2.0 * ux * uy * c01 + uy * uy * c11, 0.0))
+        return speed - sigmas * sigma > speed_mps
+
+    def not_a_person(self) -> None:
+        """Step 5's speed gate: tentative from now on, so never shown, and ended at its
+        first miss; until then it takes this object's detections, which start no track."""
+        self.too_fast = True
+        self.confirmed = False
 
     def miss(self) -> None:
         self.misses += 1
@@ -574,6 +600,10 @@ class Tracker:
                 if not track.confirmed or track.misses > p.max_missed_frames:
                     ended.append(track.id)
                     continue
+            if track.kind == "pedestrian" and track.surely_faster_than(
+                p.pedestrian_max_speed_mps, p.pedestrian_speed_gate_sigmas
+            ):
+                track.not_a_person()
             track.record(p)
             live.append(track)
         used = set(taken.values())

@@ -282,6 +282,71 @@ def test_a_fast_lead_car_is_kept_from_its_second_frame() -> None:
     assert narrow.update([_m(40.0, 0.0)], ego, DT_S).ended == (1,)
 
 
+def _follow(
+    params: TrackingParams, kind: Kind, ego_speed_mps: float, speed_mps: float, frames: int = 30
+) -> list[TrackResult]:
+    """Exact detections of one object starting 15 m ahead, 1 m left, moving along x over
+    the ground at speed_mps, seen from the ego car at ego_speed_mps."""
+    tracker, ego = Tracker(params), step(ego_speed_mps, 0.0, DT_S)
+    results = []
+    for k in range(frames):
+        x_m = 15.0 + (speed_mps - ego_speed_mps) * k * DT_S
+        results.append(tracker.update([_m(x_m, 1.0, 0, kind, 0.6)], ego, DT_S))
+    return results
+
+
+@pytest.mark.parametrize(
+    ("ego_speed_mps", "speed_mps", "kept"),
+    [
+        (0.0, 1.5, True),  # walking away from a stopped car
+        (25.0, 2.5, True),  # a jog beside the road, seen at highway speed
+        (0.0, 6.0, False),  # a sprint: faster than the gate's person
+        (25.0, 25.0, False),  # a wheel of the car ahead, keeping pace with the ego car
+    ],
+)
+def test_a_pedestrian_track_faster_than_a_person_is_not_confirmed_a_vehicle_track_is(
+    ego_speed_mps: float, speed_mps: float, kept: bool
+) -> None:
+    vehicle = _follow(P, "vehicle", ego_speed_mps, speed_mps)
+    assert [r.tracks[0].id for r in vehicle] == [1] * 30 and vehicle[-1].tracks[0].confirmed
+    pedestrian = _follow(P, "pedestrian", ego_speed_mps, speed_mps)
+    # one track takes every detection: none is ended, no second one starts
+    assert [[t.id for t in r.tracks] for r in pedestrian] == [[1]] * 30
+    last = pedestrian[-1].tracks[0]
+    assert last.vx_mps == pytest.approx(speed_mps, abs=0.1)
+    assert last.confirmed == kept
+    if not kept:  # without the gate it would be shown
+        off = dataclasses.replace(P, pedestrian_max_speed_mps=1e6)
+        assert _follow(off, "pedestrian", ego_speed_mps, speed_mps)[-1].tracks[0].confirmed
+
+
+def test_at_highway_speed_a_vehicle_part_is_shown_one_frame_at_most() -> None:
+    # confirmed on its third hit, the speed estimate is sure by the fourth
+    results = _follow(P, "pedestrian", 25.0, 25.0)
+    assert sum(r.tracks[0].confirmed for r in results) <= 1
+
+
+def test_the_speed_gate_waits_for_the_speed_to_be_sure() -> None:
+    # the first speed estimates are uncertain: without a margin a 6 m/s runner's track
+    # stops being shown sooner than with one (here: it is never shown), and with a huge
+    # margin never
+    def last_shown(sigmas: float) -> int:
+        params = dataclasses.replace(P, pedestrian_speed_gate_sigmas=sigmas)
+        results = _follow(params, "pedestrian", 0.0, 6.0)
+        return max((k for k, r in enumerate(results) if r.tracks[0].confirmed), default=-1)
+
+    assert last_shown(0.0) < last_shown(P.pedestrian_speed_gate_sigmas) < 29
+    assert last_shown(100.0) == 29
+
+
+def test_a_too_fast_pedestrian_track_ends_at_its_first_miss() -> None:
+    tracker, ego = Tracker(P), step(25.0, 0.0, DT_S)
+    for _ in range(10):
+        result = tracker.update([_m(15.0, 1.0, 0, "pedestrian", 0.6)], ego, DT_S)
+    assert not result.tracks[0].confirmed
+    assert tracker.update([], ego, DT_S).ended == (1,)
+
+
 def test_guard_rail_verdicts_are_confirmed_by_time_correlation() -> None:
     # A rail post seen every frame while driving; a slow vehicle mislabelled once is not.
     ego = step(10.0, 0.0, DT_S)
@@ -458,6 +523,9 @@ def test_duplicate_source_index_and_unknown_kind_are_rejected() -> None:
         ("initial_velocity_sigma_mps", 0.0),
         ("unknown_ego_sigma_m", math.nan),
         ("history_length", 0),
+        ("pedestrian_max_speed_mps", 0.0),
+        ("pedestrian_max_speed_mps", math.nan),
+        ("pedestrian_speed_gate_sigmas", -1.0),
     ],
 )
 def test_bad_tracking_params_name_the_field(field: str, value: float) -> None:
