@@ -98,6 +98,9 @@ JPEG_MAGIC = b"\xff\xd8\xff"
 CAN_MAX_DLC = 8
 INT64_MAX = 2**63 - 1
 NS_PER_S = 1_000_000_000
+# read_at: messages of the stream a read may pass over after the last one before it asks by
+# time (a playback that skips frames, other topics' messages do not count)
+CURSOR_LOOKAHEAD = 4
 # Stamps listed in a warning before "…".
 WARN_STAMPS = 3
 
@@ -321,6 +324,8 @@ class BagReader:
                 f"bag folder with metadata.yaml, or a .db3 or .mcap file): {_reason(err)}"
             ) from err
         self._open = True
+        # read_at's place in one stream: its connection and the messages after the last read
+        self._cursor: tuple[Connection, Iterator[tuple[int, bytes]]] | None = None
         for c in self._reader.connections:
             if not (isinstance(c.topic, str) and isinstance(c.msgtype, str)):
                 self.close()
@@ -332,6 +337,7 @@ class BagReader:
     def close(self) -> None:
         if self._open:
             self._open = False
+            self._cursor = None
             self._reader.close()
 
     def __enter__(self) -> BagReader:
@@ -441,14 +447,41 @@ class BagReader:
         return np.fromiter((t for t, _ in self._raw(conn)), dtype=np.int64)
 
     def read_at(self, conn: Connection, t_ns: int, occurrence: int = 0) -> Any:
-        """The `occurrence`-th message of `conn` received at exactly `t_ns`, deserialised."""
-        found = [raw for _, raw in self._raw(conn, t_ns, t_ns + 1)]
-        if len(found) <= occurrence:
-            raise RecordingError(
-                f"{self.path}: {conn.topic}: no message at t={t_ns} ns "
-                f"(expected at least {occurrence + 1}, found {len(found)})"
-            )
-        return self._deserialize(found[occurrence], conn, t_ns)
+        """The `occurrence`-th message of `conn` received at exactly `t_ns`, deserialised.
+
+        Reading frame after frame, each message is taken from where the last one was read
+        (`_next_at`): a query by time reads and parses the whole chunk of the file that
+        holds the message (an MCAP chunk holds about a dozen camera images), a cursor each
+        chunk once. Anything else (a seek, a repeated stamp) is a query by time, which starts
+        the cursor again after the message it found."""
+        raw = self._next_at(conn, t_ns) if occurrence == 0 else None
+        if raw is None:
+            found = [raw for _, raw in self._raw(conn, t_ns, t_ns + 1)]
+            if len(found) <= occurrence:
+                raise RecordingError(
+                    f"{self.path}: {conn.topic}: no message at t={t_ns} ns "
+                    f"(expected at least {occurrence + 1}, found {len(found)})"
+                )
+            raw = found[occurrence]
+            self._cursor = (conn, self._raw(conn, t_ns + 1, None))
+        return self._deserialize(raw, conn, t_ns)
+
+    def _next_at(self, conn: Connection, t_ns: int) -> bytes | None:
+        """The first message of `conn` at `t_ns` among the next `CURSOR_LOOKAHEAD` after the
+        last one `read_at` returned, in bag order; None (and no cursor) when it is not there:
+        the caller asks by time instead."""
+        cursor, self._cursor = self._cursor, None
+        if cursor is None or cursor[0] is not conn:
+            return None
+        messages = cursor[1]
+        for _ in range(CURSOR_LOOKAHEAD):
+            item = next(messages, None)
+            if item is None or item[0] > t_ns:
+                return None
+            if item[0] == t_ns:
+                self._cursor = cursor
+                return item[1]
+        return None
 
     def read_radar(
         self, conn: Connection, offset_ns: int = 0, *, warn: Callable[[str], None]
