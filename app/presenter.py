@@ -1,8 +1,9 @@
 """The presenter view of one browser tab: a demo for people who never open a parameter panel.
 
-The camera picture with what was found drawn on it, large on the right; the bird's-eye view
-in the 3D scene beside it; on the left the recording's name, a few large figures of the frame
-and a legend of the colours in plain words. It plays a clip at the drive's real rate, over and
+The camera picture with what was found drawn on it, large on the right, under a few large
+figures of the frame (`app.presenter_view.with_figures`); the bird's-eye view in the 3D
+scene beside it; on the left the recording's name and a legend of the colours in plain
+words. It plays a clip at the drive's real rate, over and
 over. The page has no parameter, layer or annotation controls: the view comes from the link
 that opened it (`app.view_link`) and only play/pause (and, when the server is not a
 presenter-only one, the way back to the inspector) can be clicked. The tab's own engine runs
@@ -21,7 +22,7 @@ from app.bird_eye import BirdEyeViews
 from app.draw import scaled_to_width
 from app.legend import legend_strip
 from app.player import Player
-from app.presenter_view import figures_markdown
+from app.presenter_view import with_figures
 from app.session import escape_markdown
 from app.state import DEMO_LAYERS, Panels, ViewState
 from app.view import FrameView
@@ -62,7 +63,7 @@ class PresenterSession:
 
         gui = client.gui
         self._title = gui.add_markdown("", order=0)
-        self._figures = gui.add_markdown("", order=1)
+        self._message = gui.add_markdown("", order=1)  # what went wrong with a frame
         self._play = gui.add_button("Pause", icon=viser.Icon.PLAYER_PAUSE, order=2)
         self._play.on_click(lambda _: self.set_playing(not self._player.playing))
         if on_leave is not None:
@@ -111,20 +112,21 @@ class PresenterSession:
         if recording != self.recording:
             return
         picture = scaled_to_width(view.image, PICTURE_WIDTH_PX)  # to fill its panel
+        if view.figures is not None:  # in the picture: shown with it, never before it
+            picture = with_figures(picture, view.figures)
         with self.client.atomic():
             if self._image is None:
                 with self._camera_tab:
                     self._image = self.client.gui.add_image(picture, format="jpeg")
             else:
                 self._image.image = picture
-            if view.figures is not None:
-                self._figures.content = figures_markdown(view.figures)
+            self._message.content = ""
             self._bird_eyes.show(view.bird_eyes, self._state.params)
         self.client.flush()  # out at once, as the inspector's (app.session)
 
     def show_frame_error(self, recording: str, frame: int, what: str, message: str) -> None:
         if recording == self.recording:
-            self._figures.content = f"**frame {frame} {what}:** {escape_markdown(message)}"
+            self._message.content = f"**frame {frame} {what}:** {escape_markdown(message)}"
 
     def show_error(self, headline: str, detail: str = "") -> None:
         self.set_playing(False)

@@ -1,15 +1,35 @@
-"""What the presenter view shows beside the pictures, for people who never read the papers:
+"""What the presenter view shows with the pictures, for people who never read the papers:
 a few large figures of the frame (the legend of the colours is `app.legend`'s, the layers
 drawn `app.state.DEMO_LAYERS`).
 
-Pure functions of an engine result.
+The figures are drawn over the camera picture (`with_figures`), in the same image: a page
+shows a new image only once it has decoded it, and text beside it would change first, so
+while playing the figures would describe the next frame over the last one's picture.
+
+Pure functions of an engine result and pictures. Images: RGB (H, W, 3) uint8, as in
+`app.draw`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
+import numpy as np
+
+from app import draw
+from app.legend import MARGIN_PX, banner_strip
 from core.engine import FrameResult
+
+# The figures' strip: the counts large, the time under them
+COUNTS_FONT_SCALE = 0.9
+COUNTS_THICKNESS = 2
+TIME_FONT_SCALE = 0.55
+TIME_THICKNESS = 1
+COUNTS_BASELINE_PX = 32
+TIME_BASELINE_PX = 58
+FIGURES_HEIGHT_PX = 68
+SEPARATOR = "   |   "
 
 
 @dataclass(frozen=True)
@@ -30,13 +50,41 @@ def headline_figures(result: FrameResult) -> HeadlineFigures:
     )
 
 
-def figures_markdown(figures: HeadlineFigures) -> str:
-    """The figures as large markdown lines."""
-    nearest = "–" if figures.nearest_vehicle_m is None else f"{figures.nearest_vehicle_m:.0f} m"
+def figures_lines(figures: HeadlineFigures) -> tuple[str, str]:
+    """The figures in words (ASCII: OpenCV's font has no other), the counts and the nearest
+    vehicle when there is one, then the engine's time: ("2 vehicles   |   1 pedestrian   |
+    nearest vehicle 23 m", "4.2 ms to process this frame")."""
     vehicles = "vehicle" if figures.vehicles == 1 else "vehicles"
     pedestrians = "pedestrian" if figures.pedestrians == 1 else "pedestrians"
-    return (
-        f"## {figures.vehicles} {vehicles} · {figures.pedestrians} {pedestrians}\n\n"
-        f"## nearest vehicle {nearest}\n\n"
-        f"### {figures.processing_ms:.1f} ms to process this frame"
-    )
+    parts = [f"{figures.vehicles} {vehicles}", f"{figures.pedestrians} {pedestrians}"]
+    if figures.nearest_vehicle_m is not None:
+        parts.append(f"nearest vehicle {figures.nearest_vehicle_m:.0f} m")
+    return SEPARATOR.join(parts), f"{figures.processing_ms:.1f} ms to process this frame"
+
+
+def figures_strip(figures: HeadlineFigures, width_px: int) -> draw.RgbImage:
+    """A (FIGURES_HEIGHT_PX, width_px, 3) strip of the banner's colour with `figures_lines`
+    in white, the counts large; text wider than the strip is cut at its right edge."""
+    out = banner_strip(FIGURES_HEIGHT_PX, width_px)
+    counts, time_text = figures_lines(figures)
+    for text, baseline, scale, thickness in (
+        (counts, COUNTS_BASELINE_PX, COUNTS_FONT_SCALE, COUNTS_THICKNESS),
+        (time_text, TIME_BASELINE_PX, TIME_FONT_SCALE, TIME_THICKNESS),
+    ):
+        cv2.putText(
+            out,
+            text,
+            (MARGIN_PX, baseline),
+            draw.FONT,
+            scale,
+            draw.TEXT_COLOUR,
+            thickness,
+            cv2.LINE_AA,
+        )
+    return out
+
+
+def with_figures(picture: draw.RgbImage, figures: HeadlineFigures) -> draw.RgbImage:
+    """`picture` under the strip of `figures`, as wide as it (module docstring)."""
+    draw.require_rgb_image("picture", picture)
+    return np.ascontiguousarray(np.vstack([figures_strip(figures, picture.shape[1]), picture]))

@@ -11,13 +11,18 @@ import numpy as np
 import pytest
 from engine_frames import engine_result
 
-from app.draw import scaled_to_width
-from app.legend import legend_items
+from app.draw import TEXT_COLOUR, scaled_to_width
+from app.legend import BANNER_COLOUR, MARGIN_PX, legend_items
 from app.player import Pacer, Player, Rest
 from app.presenter_view import (
+    COUNTS_BASELINE_PX,
+    FIGURES_HEIGHT_PX,
+    TIME_BASELINE_PX,
     HeadlineFigures,
-    figures_markdown,
+    figures_lines,
+    figures_strip,
     headline_figures,
+    with_figures,
 )
 from app.state import DEMO_LAYERS
 
@@ -42,10 +47,34 @@ def test_the_figures_are_the_frames_vehicles_pedestrians_and_time() -> None:
 
 
 def test_the_figures_read_as_words() -> None:
-    text = figures_markdown(HeadlineFigures(1, 2, 23.4, 4.25))
-    assert "1 vehicle ·" in text and "2 pedestrians" in text
-    assert "nearest vehicle 23 m" in text and "4.2 ms" in text
-    assert "nearest vehicle –" in figures_markdown(HeadlineFigures(0, 0, None, 1.0))
+    counts, time_text = figures_lines(HeadlineFigures(1, 2, 23.4, 4.25))
+    assert counts == "1 vehicle   |   2 pedestrians   |   nearest vehicle 23 m"
+    assert time_text == "4.2 ms to process this frame"
+    assert figures_lines(HeadlineFigures(0, 0, None, 1.0))[0] == "0 vehicles   |   0 pedestrians"
+
+
+def test_the_figures_are_drawn_over_the_picture_in_the_same_image() -> None:
+    picture = np.full((100, 740, 3), 77, np.uint8)
+    figures = HeadlineFigures(12, 10, 123.4, 123.45)  # the widest counts a frame gives
+    out = with_figures(picture, figures)
+    assert out.shape == (FIGURES_HEIGHT_PX + 100, 740, 3) and out.flags.c_contiguous
+    np.testing.assert_array_equal(out[FIGURES_HEIGHT_PX:], picture)
+    strip = out[:FIGURES_HEIGHT_PX]
+    np.testing.assert_array_equal(strip, figures_strip(figures, 740))
+    white = np.all(strip == TEXT_COLOUR, axis=2)
+    background = np.all(strip == BANNER_COLOUR, axis=2)
+    assert white.any() and np.count_nonzero(background) > strip.shape[0] * strip.shape[1] // 2
+    rows = np.flatnonzero(white.any(axis=1))
+    assert rows.min() < COUNTS_BASELINE_PX < TIME_BASELINE_PX <= rows.max() + 1
+    # both lines fit: the text ends before the strip's right margin, and the counts line is
+    # wider than the time line under it
+    columns = np.flatnonzero(white.any(axis=0))
+    assert columns.max() < 740 - MARGIN_PX
+    counts_end = np.flatnonzero(white[: COUNTS_BASELINE_PX + 2].any(axis=0)).max()
+    time_end = np.flatnonzero(white[COUNTS_BASELINE_PX + 10 :].any(axis=0)).max()
+    assert counts_end > time_end
+    with pytest.raises(ValueError, match="picture"):
+        with_figures(np.zeros((10, 10), np.uint8), figures)
 
 
 def test_an_enlarged_picture_keeps_its_aspect() -> None:
