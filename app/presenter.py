@@ -3,11 +3,11 @@
 The camera picture with what was found drawn on it, large on the right, under a few large
 figures of the frame (`app.presenter_view.with_figures`); the bird's-eye view in the 3D
 scene beside it; on the left the recording's name and a legend of the colours in plain
-words. It plays a clip at the drive's real rate, over and
-over. The page has no parameter, layer or annotation controls: the view comes from the link
-that opened it (`app.view_link`) and only play/pause (and, when the server is not a
-presenter-only one, the way back to the inspector) can be clicked. The tab's own engine runs
-on the server's render worker, as an inspector tab's does.
+words. It plays a clip at the drive's real rate, over and over. The page has no parameter,
+layer or annotation controls: the view comes from the link that opened it
+(`app.view_link`) and only play/pause (and, when the server is not a presenter-only one,
+the way back to the inspector) can be clicked. The tab's own engine runs on the server's
+render worker, as an inspector tab's does.
 """
 
 from __future__ import annotations

@@ -423,10 +423,10 @@ class TrackingParams:
     unknown_ego_sigma_m: float = 2.0
     # filtered positions kept per track, this frame's included (chosen: 3 s at 10 fps)
     history_length: int = 30
-    # a pedestrian track is ended once its speed over the ground is above this by more than
-    # pedestrian_speed_gate_sigmas of the speed's sigma: a "person" moving with the traffic
-    # is a part of a vehicle (chosen: a jog, as pedestrian.radar_min_speed_mps; the margin
-    # keeps a person seen far away, whose distance is noisy, from seeming to run)
+    # a pedestrian track is no longer confirmed once its speed over the ground is above this
+    # by more than pedestrian_speed_gate_sigmas of the speed's sigma: a "person" moving with
+    # the traffic is a part of a vehicle (chosen: a jog, as pedestrian.radar_min_speed_mps;
+    # the margin keeps a person seen far away, whose distance is noisy, from seeming to run)
     pedestrian_max_speed_mps: float = 3.0
     pedestrian_speed_gate_sigmas: float = 2.0
 
