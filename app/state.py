@@ -85,7 +85,7 @@ class ViewState:
 
     frame: int = 0
     playing: bool = False
-    layers: Layers = field(default_factory=Layers)
+    layers: Layers = INSPECTOR_LAYERS
     params: Params = field(default_factory=Params)
     panels: Panels = field(default_factory=Panels)
     params_b: Params | None = None
