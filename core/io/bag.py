@@ -47,6 +47,7 @@ else:
 from core.io import radar_msgs
 from core.io.canframe import CanFrame
 from core.io.errors import RecordingError
+from core.io.png import PNG_SIGNATURE, decode_unfiltered_grey
 from core.io.radar_msgs import CAN_FRAME
 from core.io.radarscans import RadarScans
 from core.io.timeline import main_block
@@ -92,7 +93,6 @@ RAW_ENCODINGS: dict[str, tuple[int, int, int | None]] = {
 }
 # cv2.imdecode gives BGR(A); grey conversion by channel count.
 DECODED_TO_GREY = {3: cv2.COLOR_BGR2GRAY, 4: cv2.COLOR_BGRA2GRAY}
-PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 JPEG_MAGIC = b"\xff\xd8\xff"
 # ISO 11898-1: a classic CAN data frame carries at most 8 bytes.
 CAN_MAX_DLC = 8
@@ -237,11 +237,14 @@ def _decode_compressed(msg: Any, where: str) -> npt.NDArray[Any]:
     """(H, W) or (H, W, 3|4) BGR(A), uint8 or uint16, from PNG or JPEG data."""
     buf = np.asarray(msg.data, dtype=np.uint8)
     head = buf[:8].tobytes()
-    if not (head.startswith(PNG_MAGIC) or head.startswith(JPEG_MAGIC)):
+    if not (head.startswith(PNG_SIGNATURE) or head.startswith(JPEG_MAGIC)):
         raise RecordingError(
             f"{where}: cannot decode image: expected PNG or JPEG data, format {msg.format!r}, "
             f"{buf.size} bytes starting {head!r}"
         )
+    plain = decode_unfiltered_grey(np.ascontiguousarray(buf).data)
+    if plain is not None:
+        return plain
     try:
         img = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED)
     except cv2.error as err:

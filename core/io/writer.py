@@ -58,7 +58,8 @@ PNG_FORMAT = "mono8; png compressed mono8"
 # and zlib level 6. On the bundled drives' frames libpng decodes these in 1.0 ms against
 # 1.9 ms for its adaptive filters (mostly Paeth) with Huffman-only coding, the choice until
 # 2026-11, for 14 % more bytes; a real 960x540 dashcam frame decodes in 1.9 ms against
-# 3.6 ms, for 26 % more. Encoding takes about 14 ms a synthetic frame.
+# 3.6 ms, for 26 % more. Encoding takes about 14 ms a synthetic frame. Without filters the
+# frames also take core.io.png's fast path (libdeflate), which is faster still.
 PNG_PARAMS = [
     cv2.IMWRITE_PNG_COMPRESSION,
     6,
