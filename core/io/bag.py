@@ -234,7 +234,8 @@ def _to_8bit(img: npt.NDArray[np.uint16], bits: int) -> npt.NDArray[np.uint8]:
 
 
 def _decode_compressed(msg: Any, where: str) -> npt.NDArray[Any]:
-    """(H, W) or (H, W, 3|4) BGR(A), uint8 or uint16, from PNG or JPEG data."""
+    """(H, W) or (H, W, 3|4) BGR(A), uint8 or uint16, from PNG or JPEG data: this project's
+    own PNG layout by `core.io.png`, anything else by OpenCV."""
     buf = np.asarray(msg.data, dtype=np.uint8)
     head = buf[:8].tobytes()
     if not (head.startswith(PNG_SIGNATURE) or head.startswith(JPEG_MAGIC)):

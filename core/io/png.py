@@ -22,9 +22,8 @@ import numpy.typing as npt
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 CHUNK_HEAD = struct.Struct(">I4s")  # length, type
-IHDR = struct.Struct(
-    ">IIBBBBB"
-)  # width, height, bit depth, colour type, compression, filter, interlace
+# width, height, bit depth, colour type, compression, filter method, interlace
+IHDR = struct.Struct(">IIBBBBB")
 GREY_8BIT_PLAIN = (8, 0, 0, 0, 0)  # bit depth 8, grey, deflate, filter method 0, not interlaced
 CRC_BYTES = 4
 MAX_INFLATE_RATIO = 1032  # deflate's largest expansion: a larger IHDR cannot be this data's
