@@ -107,13 +107,18 @@ def label(name: str, checkout: Path) -> str:
     """`name` and the checkout's commit ("this 1a2b3c4", "+" when it has changes), or `name`
     alone outside git."""
     git = ["git", "-C", str(checkout)]
-    head = subprocess.run([*git, "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
+    try:
+        head = subprocess.run(
+            [*git, "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+        )
+        changes = subprocess.run(
+            [*git, "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True
+        )
+    except FileNotFoundError:  # no git on this machine
+        return name
     if head.returncode != 0:
         return name
-    dirty = subprocess.run(
-        [*git, "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True
-    ).stdout.strip()
-    return f"{name} {head.stdout.strip()}{'+' if dirty else ''}"
+    return f"{name} {head.stdout.strip()}{'+' if changes.stdout.strip() else ''}"
 
 
 def _span(values: Sequence[float], fmt: str) -> str:
@@ -186,24 +191,36 @@ def main(argv: Sequence[str] | None = None) -> int:
         if not (against / "core" / "cli.py").is_file():
             parser.error(f"--against: expected a fusionscope checkout, got {against}")
         checkouts[label("against", against)] = against
+    try:
+        results, kernels = _measure(recordings, checkouts, options.runs, options.cpu)
+    except (RuntimeError, ValueError) as err:
+        print(f"bench_export: {err}", file=sys.stderr)
+        return 1
+    print(format_table(results, kernels))
+    return 0
+
+
+def _measure(
+    recordings: Sequence[Path], checkouts: dict[str, Path], runs: int, cpu: int
+) -> tuple[dict[tuple[str, str], list[Export]], list[float]]:
+    """`runs` times: the kernel, then each recording exported by each checkout in turn."""
     results: dict[tuple[str, str], list[Export]] = {
         (r.name, c): [] for r in recordings for c in checkouts
     }
     kernels: list[float] = []
     with tempfile.TemporaryDirectory(prefix="bench-export-") as out_dir:
-        for run in range(1, options.runs + 1):
-            kernels.append(kernel_ms(options.cpu))
+        for run in range(1, runs + 1):
+            kernels.append(kernel_ms(cpu))
             for recording in recordings:
                 for name, checkout in checkouts.items():
-                    figures = export(checkout, recording, Path(out_dir), options.cpu)
+                    figures = export(checkout, recording, Path(out_dir), cpu)
                     results[(recording.name, name)].append(figures)
                     print(
                         f"run {run}: {recording.name} {name} {figures.time_s:.2f} s, "
                         f"{figures.real_time:.1f}x (kernel {kernels[-1]:.3f} ms)",
                         file=sys.stderr,
                     )
-    print(format_table(results, kernels))
-    return 0
+    return results, kernels
 
 
 if __name__ == "__main__":

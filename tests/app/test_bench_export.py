@@ -76,3 +76,14 @@ def test_bad_arguments_are_named(
         bench.main(args)
     assert stop.value.code == 2
     assert re.search(error, capsys.readouterr().err)
+
+
+def test_a_failing_export_is_reported_with_its_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    not_a_drive = tmp_path / "empty"
+    not_a_drive.mkdir()
+    assert bench.main(["--runs", "1", str(not_a_drive)]) == 1
+    err = capsys.readouterr().err
+    assert re.search(r"bench_export: .*: fusionscope export-video .*empty.* failed \(\d+\): ", err)
+    assert str(not_a_drive) in err.splitlines()[-1]
