@@ -24,12 +24,12 @@ from app.server import DriveOpener, InspectorServer, open_drive
 from app.view import PREVIEW_NOTE, STAGE_GAP_PX
 from core.io.drive import Drive
 
-BENCH_SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "bench_inspector.py"
+SCRIPTS = Path(__file__).resolve().parents[2] / "scripts"
 
 
-def load_bench_script() -> ModuleType:
-    """scripts/bench_inspector.py as a module (it is a script, not a package module)."""
-    spec = importlib.util.spec_from_file_location("bench_inspector", BENCH_SCRIPT)
+def load_script(name: str) -> ModuleType:
+    """scripts/NAME.py as a module (a script, not a package module)."""
+    spec = importlib.util.spec_from_file_location(name, SCRIPTS / f"{name}.py")
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # dataclasses look their module up
@@ -38,7 +38,7 @@ def load_bench_script() -> ModuleType:
 
 
 # Chromium as the benchmark runs it: Debian's, headless, without a GPU or background traffic
-_BENCH = load_bench_script()
+_BENCH = load_script("bench_inspector")
 CHROMIUM: Path = _BENCH.CHROMIUM
 CHROMIUM_ARGS: list[str] = _BENCH.CHROMIUM_ARGS
 SCREENSHOTS = Path(tempfile.gettempdir()) / "fusionscope-browser-tests"

@@ -4,31 +4,18 @@ No time is asserted: the script measures, the people reading it judge."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import re
-import sys
 from pathlib import Path
-from types import ModuleType
 
 import pytest
 from app_fakes import Recordings
+from browser_page import load_script
 
 from app.video_export import ExportSummary, summary_text
 
-SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "bench_export.py"
-
-
-def _load() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("bench_export", SCRIPT)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
-
-bench = _load()
+bench = load_script("bench_export")
+CHECKOUT = Path(__file__).resolve().parents[2]
 
 
 def test_the_figures_are_read_from_export_videos_own_summary() -> None:
@@ -47,7 +34,7 @@ def test_one_run_against_this_checkout_prints_both_rows(
     recordings: Recordings, capsys: pytest.CaptureFixture[str]
 ) -> None:
     drive = recordings.root / recordings.name
-    assert bench.main(["--runs", "1", "--against", str(SCRIPT.parents[1]), str(drive)]) == 0
+    assert bench.main(["--runs", "1", "--against", str(CHECKOUT), str(drive)]) == 0
     table = capsys.readouterr().out
     rows = [line for line in table.splitlines() if line.startswith(f"| {drive.name} |")]
     assert [row.split(" | ")[1].split()[0] for row in rows] == ["this", "against"]

@@ -13,7 +13,7 @@ import os
 from pathlib import Path
 
 import pytest
-from browser_page import CHROMIUM, load_bench_script
+from browser_page import CHROMIUM, load_script
 
 
 def numbers(value: object) -> list[float]:
@@ -37,7 +37,7 @@ def test_tiny_run_prints_finite_figures_and_stops_its_server(
         if os.environ.get("CI") or os.environ.get("REQUIRE_BROWSER"):
             pytest.fail(message + " (CI / REQUIRE_BROWSER is set)")
         pytest.skip(message)
-    bench = load_bench_script()
+    bench = load_script("bench_inspector")
     args = ["--seeks", "3", "--moves", "3", "--play-s", "2", "--tabs", "2", "--warmup", "1"]
     code = bench.main([*args, "--json", "--no-progress"])
     out = capsys.readouterr().out
