@@ -87,4 +87,4 @@ def figures_strip(figures: HeadlineFigures, width_px: int) -> draw.RgbImage:
 def with_figures(picture: draw.RgbImage, figures: HeadlineFigures) -> draw.RgbImage:
     """`picture` under the strip of `figures`, as wide as it (module docstring)."""
     draw.require_rgb_image("picture", picture)
-    return np.ascontiguousarray(np.vstack([figures_strip(figures, picture.shape[1]), picture]))
+    return np.vstack([figures_strip(figures, picture.shape[1]), picture])

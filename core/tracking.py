@@ -453,9 +453,9 @@ class _TrackState:
         speed = math.hypot(self.vx, self.vy)
         if speed <= speed_mps:
             return False
-        c00, c01, c11 = self.P[7], self.P[8], self.P[9]
+        p22, p23, p33 = self.P[7:]  # C, the velocity block
         ux, uy = self.vx / speed, self.vy / speed
-        sigma = math.sqrt(max(ux * ux * c00 + 2.0 * ux * uy * c01 + uy * uy * c11, 0.0))
+        sigma = math.sqrt(max(ux * ux * p22 + 2.0 * ux * uy * p23 + uy * uy * p33, 0.0))
         return speed - sigmas * sigma > speed_mps
 
     def not_a_person(self) -> None:

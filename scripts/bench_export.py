@@ -65,10 +65,6 @@ def parse_summary(text: str) -> Export:
     )
 
 
-def _pinned(cpu: int) -> None:
-    os.sched_setaffinity(0, {cpu})
-
-
 def _run(checkout: Path, args: Sequence[str], cpu: int) -> str:
     """`python -m core.cli ARGS` of `checkout`, pinned to `cpu`; its standard output.
     RuntimeError with its error output when it fails."""
@@ -79,7 +75,7 @@ def _run(checkout: Path, args: Sequence[str], cpu: int) -> str:
         env=env,
         capture_output=True,
         text=True,
-        preexec_fn=lambda: _pinned(cpu),
+        preexec_fn=lambda: os.sched_setaffinity(0, {cpu}),
         check=False,
     )
     if done.returncode != 0:
