@@ -15,8 +15,10 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from core.annotation.model import Track
-    from core.importer import CalibrationSpec, CanSpec, ImportOptions, ImportResult, IntrinsicsSpec
     from core.io.drive import Drive
+    from core.io.importers.calibration_spec import CalibrationSpec, IntrinsicsSpec
+    from core.io.importers.can_mapping import CanSpec
+    from core.io.importers.finish import ImportOptions, ImportResult
     from core.params import Params
 
 DEFAULT_RECORDINGS = Path(__file__).resolve().parents[1] / "recordings"
@@ -140,8 +142,13 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 
 
 def _calibration_spec(args: argparse.Namespace) -> CalibrationSpec:
-    from core.importer import CalibrationSpec, CameraInfoFile, FieldOfView, Pinhole
     from core.io.calibration import RadarMount
+    from core.io.importers.calibration_spec import (
+        CalibrationSpec,
+        CameraInfoFile,
+        FieldOfView,
+        Pinhole,
+    )
 
     given = [
         flag
@@ -196,7 +203,7 @@ def _calibration_spec(args: argparse.Namespace) -> CalibrationSpec:
 
 
 def _can_spec(args: argparse.Namespace, from_bag: bool) -> CanSpec | None:
-    from core.importer import CanSpec
+    from core.io.importers.can_mapping import CanSpec
 
     log = getattr(args, "can", None)
     topic = getattr(args, "can_topic", None)
@@ -223,7 +230,7 @@ def _can_spec(args: argparse.Namespace, from_bag: bool) -> CanSpec | None:
 
 
 def _options(args: argparse.Namespace) -> ImportOptions:
-    from core.importer import ImportOptions
+    from core.io.importers.finish import ImportOptions
     from core.io.manifest import Assumptions
 
     return ImportOptions(
@@ -245,8 +252,10 @@ def _report(result: ImportResult, seconds: float) -> None:
 
 
 def _cmd_import(args: argparse.Namespace) -> int:
-    from core.importer import VideoSampling, import_bag, import_still, import_video
     from core.io.errors import RecordingError
+    from core.io.importers.bag import import_bag
+    from core.io.importers.still import import_still
+    from core.io.importers.video import VideoSampling, import_video
 
     command = f"fusionscope import {args.kind}"
     started = time.monotonic()
@@ -855,7 +864,7 @@ def _cmd_serve(args: argparse.Namespace) -> int:
 
 
 def _image_size_args(p: argparse.ArgumentParser) -> None:
-    from core.importer import DEFAULT_WIDTH_PX
+    from core.io.importers.finish import DEFAULT_WIDTH_PX
 
     p.add_argument(
         "--width",
@@ -891,7 +900,7 @@ def _can_args(p: argparse.ArgumentParser, from_bag: bool) -> None:
 
 
 def _common_import_args(p: argparse.ArgumentParser) -> None:
-    from core.importer import DEFAULT_CAMERA_HEIGHT_M, DEFAULT_CAMERA_X_M
+    from core.io.importers.calibration_spec import DEFAULT_CAMERA_HEIGHT_M, DEFAULT_CAMERA_X_M
 
     g = p.add_argument_group("camera intrinsics (exactly one way)")
     g.add_argument(
@@ -970,7 +979,8 @@ def _common_import_args(p: argparse.ArgumentParser) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     from core.annotation.formats import FORMATS
-    from core.importer import DEFAULT_FPS, MAPPING_EXAMPLE
+    from core.io.importers.can_mapping import MAPPING_EXAMPLE
+    from core.io.importers.video import DEFAULT_FPS
     from core.synth.scenarios import SCENARIOS
 
     parser = argparse.ArgumentParser(

@@ -73,7 +73,7 @@ RAV4_YAW_RAD = 0.0165
 def rav4(realdata: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The RAV4's first frame imported with its CAN log (speed, yaw rate, radar tracks)."""
     from core.cli import main
-    from core.importer import MAPPING_EXAMPLE
+    from core.io.importers.can_mapping import MAPPING_EXAMPLE
 
     rav4 = realdata / "comma2k19-rav4"
     mapping = tmp_path_factory.mktemp("mapping") / "rav4.yaml"

@@ -21,9 +21,10 @@ from rosbags.typesys.store import Typestore
 
 from core.camera import Intrinsics
 from core.cli import main
-from core.importer import MAPPING_EXAMPLE, scale_intrinsics
 from core.io import Drive, load_calibration, load_manifest, radar_msgs
 from core.io.calibration import save_camera_info
+from core.io.importers.calibration_spec import scale_intrinsics
+from core.io.importers.can_mapping import MAPPING_EXAMPLE
 from core.io.manifest import BagStream, RadarCanSource
 from core.io.writer import png_image_message, vehicle_dbc_path
 
