@@ -320,6 +320,49 @@ def _cmd_import(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_import_dataset(args: argparse.Namespace) -> int:
+    """`import nuscenes` and `import aimotive`: a data set's scene or sequence."""
+    from core.io.errors import RecordingError
+    from core.io.importers.finish import ImportOptions
+
+    command = f"fusionscope import {args.kind}"
+    started = time.monotonic()
+    try:
+        options = ImportOptions(name=args.name)
+        if args.kind == "nuscenes":
+            from core.io.importers.nuscenes import import_nuscenes
+
+            radars = tuple(r.strip() for r in args.radars.split(",") if r.strip())
+            result = import_nuscenes(
+                Path(args.source),
+                Path(args.out_dir),
+                args.scene,
+                args.version,
+                args.camera,
+                radars,
+                args.width,
+                options,
+                progress=ProgressBar("import nuscenes"),
+            )
+        else:
+            from core.io.importers.aimotive import import_aimotive
+
+            result = import_aimotive(
+                Path(args.source),
+                Path(args.out_dir),
+                args.camera,
+                args.radar,
+                args.width,
+                options,
+                progress=ProgressBar("import aimotive"),
+            )
+    except (ValueError, RecordingError, OSError) as err:
+        print(f"{command}: {err}", file=sys.stderr)
+        return 2
+    _report(result, time.monotonic() - started)
+    return 0
+
+
 def _frames_text(ranges: Sequence[tuple[int, int]]) -> str:
     """'20 (0-19)' for the frames of inclusive (first, last) ranges; 'none' without any."""
     if not ranges:
@@ -834,6 +877,7 @@ DEFAULT_PRESETS = (
 
 def _cmd_serve(args: argparse.Namespace) -> int:
     from app.server import serve
+    from core.io.manifest import MANIFEST_NAME
     from core.malloc import keep_freed_memory
 
     # its render workers draw frame after frame: the motion stereo picture took 5 ms and
@@ -856,7 +900,10 @@ def _cmd_serve(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     try:
-        serve(root, args.recording, args.host, args.port, Path(args.presets), args.present)
+        recording = args.recording
+        if recording is None and (root / DEFAULT_RECORDING / MANIFEST_NAME).is_file():
+            recording = DEFAULT_RECORDING
+        serve(root, recording, args.host, args.port, Path(args.presets), args.present)
     except ValueError as err:
         print(f"fusionscope serve: {err}", file=sys.stderr)
         return 2
@@ -979,7 +1026,12 @@ def _common_import_args(p: argparse.ArgumentParser) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     from core.annotation.formats import FORMATS
+    from core.io.importers.aimotive import DEFAULT_CAMERA as AIMOTIVE_CAMERA
+    from core.io.importers.aimotive import DEFAULT_RADAR as AIMOTIVE_RADAR
     from core.io.importers.can_mapping import MAPPING_EXAMPLE
+    from core.io.importers.nuscenes import DEFAULT_CAMERA as NUSCENES_CAMERA
+    from core.io.importers.nuscenes import DEFAULT_RADARS as NUSCENES_RADARS
+    from core.io.importers.nuscenes import DEFAULT_VERSION as NUSCENES_VERSION
     from core.io.importers.video import DEFAULT_FPS
     from core.synth.scenarios import SCENARIOS
 
@@ -996,8 +1048,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     serve.add_argument(
         "--recording",
-        default=DEFAULT_RECORDING,
-        help=f"recording opened first (default: {DEFAULT_RECORDING})",
+        help=f"recording opened first (default: {DEFAULT_RECORDING} when the folder holds it, "
+        "else the first by name)",
     )
     serve.add_argument("--host", default="127.0.0.1", help="address to bind (default: 127.0.0.1)")
     serve.add_argument("--port", type=int, default=8080, help="port (default: 8080)")
@@ -1050,7 +1102,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     imp = sub.add_parser(
         "import",
-        help="make a recording from a video, a still image or a ROS bag",
+        help="make a recording from a video, a still image, a ROS bag, nuScenes or aiMotive",
         description="Make a recording folder that `fusionscope serve` opens.",
     )
     kinds = imp.add_subparsers(dest="kind", required=True)
@@ -1148,6 +1200,80 @@ def build_parser() -> argparse.ArgumentParser:
     _can_args(bag, from_bag=True)
     _common_import_args(bag)
     bag.set_defaults(func=_cmd_import)
+
+    nuscenes = kinds.add_parser(
+        "nuscenes",
+        help="one scene of a nuScenes version folder (camera, front radars, ego poses, 3D boxes)",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=_paragraph(
+            "One scene of DATAROOT/VERSION (nuScenes' own layout: a full install or a cut-down "
+            "folder; rows of sample_data without their file are skipped and counted). The "
+            "camera's images become grey frames (12 Hz with sweeps, the keyframes' 2 Hz "
+            "without); the radars' points (nuScenes' default filter) are brought to each "
+            "frame's time with both ego poses; speed and yaw rate come from the ego poses; "
+            "ground truth from the keyframes' 3D boxes (no true pitch, no guard rails). "
+            "nuScenes is CC BY-NC-SA 4.0: keep the recording out of other repositories."
+        ),
+        epilog=textwrap.dedent(
+            """\
+            example:
+              fusionscope import nuscenes ../shared/realdata/nuscenes-mini-scene-0523 \\
+                  recordings-real/nuscenes-0523 --scene scene-0523
+            """
+        ),
+    )
+    nuscenes.add_argument("source", metavar="DATAROOT", help="folder holding VERSION/ and samples/")
+    nuscenes.add_argument(
+        "out_dir", metavar="OUT_DIR", help="new or empty folder for the recording"
+    )
+    nuscenes.add_argument(
+        "--scene", required=True, metavar="NAME", help="scene name, e.g. scene-0523"
+    )
+    nuscenes.add_argument(
+        "--version", default=NUSCENES_VERSION, help="version folder (default: %(default)s)"
+    )
+    nuscenes.add_argument(
+        "--camera", default=NUSCENES_CAMERA, help="camera channel (default: %(default)s)"
+    )
+    nuscenes.add_argument(
+        "--radars",
+        default=",".join(NUSCENES_RADARS),
+        metavar="CHANNELS",
+        help="radar channels, comma-separated (default: %(default)s)",
+    )
+    _image_size_args(nuscenes)
+    nuscenes.add_argument("--name", help="recording name (default: nuscenes-SCENE)")
+    nuscenes.set_defaults(func=_cmd_import_dataset)
+
+    aimotive = kinds.add_parser(
+        "aimotive",
+        help="one sequence of the aiMotive Multimodal Dataset (camera, radar, 3D boxes)",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=_paragraph(
+            "One sequence folder (sensor/camera, sensor/radar, sensor/calibration, "
+            "dynamic/box/3d_body). The camera is undistorted and made grey; the radar's "
+            "detections are kept with their elevation ignored; the ego speed comes from the "
+            "radar's stationary returns (the sequence records none), yaw rate 0; ground truth "
+            "from the 3D boxes (no true pitch, no guard rails). aiMotive's data is "
+            "CC BY-NC-SA 4.0: keep the recording out of other repositories."
+        ),
+        epilog=textwrap.dedent(
+            """\
+            example:
+              fusionscope import aimotive ../shared/realdata/aimotive-night-motorway \\
+                  recordings-real/aimotive-night
+            """
+        ),
+    )
+    aimotive.add_argument("source", metavar="SEQUENCE_DIR", help="the sequence folder")
+    aimotive.add_argument(
+        "out_dir", metavar="OUT_DIR", help="new or empty folder for the recording"
+    )
+    aimotive.add_argument("--camera", default=AIMOTIVE_CAMERA, help="camera (default: %(default)s)")
+    aimotive.add_argument("--radar", default=AIMOTIVE_RADAR, help="radar (default: %(default)s)")
+    _image_size_args(aimotive)
+    aimotive.add_argument("--name", help="recording name (default: aimotive-SEQUENCE)")
+    aimotive.set_defaults(func=_cmd_import_dataset)
 
     annotations = sub.add_parser(
         "annotations",

@@ -10,7 +10,9 @@ pitch, scored frame by frame against ground truth.
   within NEAR_RAIL_M of a truth rail and on no vehicle. FN: a rail return not labelled;
   FP: a labelled target that is no rail return; vehicles labelled: labelled targets lying on
   a vehicle (paper 002: must be 0). Truth rails are image polylines along the beam
-  (RAIL_HEIGHT_M above the road), taken to the road plane with the frame's true pitch.
+  (RAIL_HEIGHT_M above the road), taken to the road plane with the frame's true pitch. On
+  frames whose truth does not label guard rails (real drives imported with their 3D
+  labels) only the vehicles labelled count: rail returns, FN and FP need rail truth.
 - Motion stereo: the expected obstacles are truth objects on its grid, less than
   MAX_OCCLUSION hidden, at least MIN_BOX_HEIGHT_PX tall, and moving when the car stands
   still (background subtraction sees only what moves). On the camera image's row window:
@@ -127,6 +129,7 @@ class RailScore:
     fn_at: tuple[tuple[int, int], ...] = ()
     fp_at: tuple[tuple[int, int], ...] = ()
     vehicles_labelled_at: tuple[tuple[int, int], ...] = ()
+    rail_truth_frames: int = 0  # frames whose truth labels guard rails: FN and FP count there
 
     @property
     def fn(self) -> int:
@@ -172,7 +175,8 @@ def score_rails(
     truth: FrameTruth,
     rails_m: Sequence[npt.NDArray[np.float64]],
 ) -> RailScore:
-    """One frame: the targets the guard-rail filter checked and those it labelled."""
+    """One frame: the targets the guard-rail filter checked and those it labelled. Without
+    rail truth (truth.rails_labelled False) only the vehicles labelled guard rail count."""
     vehicles = [o for o in truth.objects if o.cls in VEHICLE_CLASSES]
     returns = 0
     fn_at, fp_at, vehicles_at = [], [], []
@@ -181,15 +185,23 @@ def score_rails(
         on_vehicle = any(lies_on(t.x_m, t.y_m, o) for o in vehicles)
         near = min((distance_to_polyline_m(t.x_m, t.y_m, r) for r in rails_m), default=math.inf)
         rail = near < NEAR_RAIL_M and not on_vehicle
+        if i in labelled and on_vehicle:
+            vehicles_at.append((index, i))
+        if not truth.rails_labelled:
+            continue
         returns += rail
         if rail and i not in labelled:
             fn_at.append((index, i))
         if i in labelled and not rail:
             fp_at.append((index, i))
-        if i in labelled and on_vehicle:
-            vehicles_at.append((index, i))
     return RailScore(
-        len(checked), returns, len(labelled), tuple(fn_at), tuple(fp_at), tuple(vehicles_at)
+        len(checked),
+        returns,
+        len(labelled),
+        tuple(fn_at),
+        tuple(fp_at),
+        tuple(vehicles_at),
+        int(truth.rails_labelled),
     )
 
 

@@ -89,13 +89,19 @@ def _events_json(e: EventStats) -> dict[str, Any]:
     }
 
 
+def _if_rail_truth(r: RailScore, count: int) -> str:
+    """A count that needs guard-rail truth, "-" where no frame had any."""
+    return str(count) if r.rail_truth_frames else "-"
+
+
 def _rails_json(r: RailScore, listings: bool) -> dict[str, Any]:
+    truth = r.rail_truth_frames > 0  # without rail truth only vehicles labelled are scored
     out: dict[str, Any] = {
         "slow_targets": r.slow_targets,
-        "rail_returns": r.rail_returns,
+        "rail_returns": r.rail_returns if truth else None,
         "labelled": r.labelled,
-        "fn": r.fn,
-        "fp": r.fp,
+        "fn": r.fn if truth else None,
+        "fp": r.fp if truth else None,
         "vehicles_labelled": r.vehicles_labelled,
     }
     if listings:
@@ -338,16 +344,16 @@ def tables(
             ),
         ),
         Table(
-            "Guard rails (paper 002): slow radar targets",
+            "Guard rails (paper 002): slow radar targets (-: no guard-rail truth)",
             ("recording", "slow", "rail returns", "labelled", "FN", "FP", "vehicles labelled"),
             tuple(
                 (
                     r.name,
                     str(r.guardrails.slow_targets),
-                    str(r.guardrails.rail_returns),
+                    _if_rail_truth(r.guardrails, r.guardrails.rail_returns),
                     str(r.guardrails.labelled),
-                    str(r.guardrails.fn),
-                    str(r.guardrails.fp),
+                    _if_rail_truth(r.guardrails, r.guardrails.fn),
+                    _if_rail_truth(r.guardrails, r.guardrails.fp),
                     str(r.guardrails.vehicles_labelled),
                 )
                 for r in rows

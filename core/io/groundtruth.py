@@ -15,12 +15,17 @@ pixels in continuous image coordinates (pixel centres at integers, so a box cove
 10..19 runs from u0 = 9.5 to u1 = 19.5); position_m is the centre of the object's base
 (nearest face centre for vehicles seen from behind or front) in the vehicle frame at t_ns;
 velocity_mps is over ground in the vehicle frame axes; occlusion is the hidden fraction of
-the object's full image box.
+the object's full image box. guard_rails is null where the truth does not label guard rails
+(the evaluation then scores only the vehicles labelled guard rail), and pitch_rad is null
+where the truth has no pitch (real drives
+imported with their labels): the evaluation then scores no pitch. Frames the file does not
+list have no truth and count neither way (a real drive's frames between its labelled ones).
 """
 
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -64,6 +69,7 @@ class FrameTruth:
     pitch_rad: float
     objects: tuple[TruthObject, ...]
     guard_rails: tuple[TruthGuardRail, ...]
+    rails_labelled: bool = True  # False: the truth says nothing of guard rails (null in the file)
 
 
 def _object_to_json(o: TruthObject) -> dict[str, Any]:
@@ -87,9 +93,11 @@ def write_groundtruth(frames: Sequence[FrameTruth], path: Path | str) -> None:
             {
                 "index": f.index,
                 "t_ns": f.t_ns,
-                "pitch_rad": round(f.pitch_rad, 6),
+                "pitch_rad": None if math.isnan(f.pitch_rad) else round(f.pitch_rad, 6),
                 "objects": [_object_to_json(o) for o in f.objects],
-                "guard_rails": [
+                "guard_rails": None
+                if not f.rails_labelled
+                else [
                     {
                         "id": g.id,
                         "side": g.side,
@@ -149,10 +157,12 @@ def read_groundtruth(path: Path | str) -> list[FrameTruth]:
                     side=str(g["side"]),
                     polyline_px=tuple((float(u), float(v)) for u, v in g["polyline_px"]),
                 )
-                for g in f.get("guard_rails", [])
+                for g in f.get("guard_rails") or []
             )
+            pitch = math.nan if f["pitch_rad"] is None else float(f["pitch_rad"])
+            labelled = f.get("guard_rails", []) is not None
             frames.append(
-                FrameTruth(int(f["index"]), int(f["t_ns"]), float(f["pitch_rad"]), objects, rails)
+                FrameTruth(int(f["index"]), int(f["t_ns"]), pitch, objects, rails, labelled)
             )
         except KeyError as err:
             raise RecordingError(f"{p}: {where}: missing field {err.args[0]!r}") from err
