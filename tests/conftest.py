@@ -91,6 +91,25 @@ def rav4(realdata: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     return out
 
 
+# The README's import commands for the real drives (section "Real drives with real truth"),
+# by the name of the recording each makes.
+REAL_IMPORTS = {
+    "nuscenes-scene-0523": ("nuscenes", "nuscenes-mini-scene-0523", "--scene", "scene-0523"),
+    "aimotive-night-motorway": ("aimotive", "aimotive-night-motorway"),
+}
+
+
+@pytest.fixture(scope="session")
+def real_recordings(realdata: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A folder holding the nuScenes and aiMotive drives imported as the README says."""
+    from core.cli import main
+
+    root = tmp_path_factory.mktemp("recordings-real")
+    for name, (kind, source, *rest) in REAL_IMPORTS.items():
+        assert main(["import", kind, str(realdata / source), str(root / name), *rest]) == 0
+    return root
+
+
 BUNDLED = ("highway", "exurban", "stop_and_go")
 
 

@@ -26,8 +26,22 @@ def test_serve_refuses_a_recording_that_is_not_there(
 
 def test_serve_defaults_to_loopback_port_8080_and_the_bundled_highway() -> None:
     args = build_parser().parse_args(["serve"])
-    assert (args.host, args.port, args.recording) == ("127.0.0.1", 8080, "highway")
+    assert (args.host, args.port, args.recording) == ("127.0.0.1", 8080, None)
     assert (Path(args.recordings) / "highway" / "recording.yaml").is_file()
+
+
+@pytest.mark.parametrize(("names", "first"), [(("a", "highway"), "highway"), (("b", "a"), None)])
+def test_serve_opens_highway_first_when_the_folder_holds_it_else_the_first_by_name(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, names: tuple[str, ...], first: str | None
+) -> None:
+    # None: app.server takes the first recording by name (tests/app cover that part)
+    for name in names:
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "recording.yaml").write_text("format_version: 1\n")
+    opened: list[str | None] = []
+    monkeypatch.setattr("app.server.serve", lambda root, recording, *rest: opened.append(recording))
+    assert main(["serve", "--recordings", str(tmp_path)]) == 0
+    assert opened == [first]
 
 
 def test_serve_warns_that_another_host_has_no_authentication(

@@ -16,7 +16,7 @@ import pytest
 
 from core.cli import DEFAULT_RECORDINGS, main
 from core.evaluation import report
-from core.evaluation.evaluate import RecordingReport, total
+from core.evaluation.evaluate import RecordingReport, evaluate_recording, total
 from core.evaluation.mot import MotAccumulator
 from core.evaluation.objects import (
     RAIL_HEIGHT_M,
@@ -36,7 +36,8 @@ from core.evaluation.vehicles import (
 )
 from core.io.frame import RadarTarget
 from core.io.groundtruth import FrameTruth, TruthObject
-from core.params import MotionStereoParams
+from core.params import MotionStereoParams, Params
+from tests.conftest import REAL_IMPORTS
 
 TOLERANCE_M = 0.4
 
@@ -387,6 +388,29 @@ def test_the_readmes_tables_are_the_commands_output_today(
         "--baselines --format markdown` between its evaluate markers"
     )
     assert len(_untimed(out)) == len(out.split("\n\n**")) - len(TIMED_TITLES)
+
+
+REAL_BEGIN, REAL_END = "<!-- evaluate-real:begin -->\n", "<!-- evaluate-real:end -->\n"
+
+
+def test_the_readmes_real_drive_tables_are_the_commands_output_today(
+    real_recordings: Path,
+) -> None:
+    reports = [
+        evaluate_recording(real_recordings / name, Params(), timing=False) for name in REAL_IMPORTS
+    ]
+    text = README.read_text(encoding="utf-8")
+    block = text[text.index(REAL_BEGIN) + len(REAL_BEGIN) : text.index(REAL_END)]
+    out = report.format_markdown(report.tables(reports, total(reports), listings=False))
+    assert _untimed(block) == _untimed(out), (
+        "README.md's 'Real drives' tables are stale: paste the output of `fusionscope "
+        "evaluate recordings-real/nuscenes-scene-0523 recordings-real/aimotive-night-motorway "
+        "--format markdown` between its evaluate-real markers"
+    )
+    # what the truth lacks is not scored: no pitch, no guard-rail FN/FP, only vehicles labelled
+    for r in reports:
+        assert r.pitch.errors_deg == () and r.guardrails.rail_truth_frames == 0
+        assert r.guardrails.fn == r.guardrails.fp == 0
 
 
 def test_the_baselines_are_scored_on_the_engines_frames(
