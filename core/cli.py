@@ -237,6 +237,7 @@ def _options(args: argparse.Namespace) -> ImportOptions:
         name=args.name,
         assumptions=Assumptions(args.assume_speed_mps, args.assume_yaw_rate_radps),
         max_radar_skew_ms=args.max_radar_skew_ms,
+        ego_from_radar=getattr(args, "ego_from_radar", False),
     )
 
 
@@ -1199,6 +1200,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _can_args(bag, from_bag=True)
     _common_import_args(bag)
+    bag.add_argument(
+        "--ego-from-radar",
+        action="store_true",
+        help="without CAN speed: estimate the speed from the radar's stationary returns and "
+        "write it into the recording as CAN frames, yaw rate 0 (the radar gives none usable)",
+    )
     bag.set_defaults(func=_cmd_import)
 
     nuscenes = kinds.add_parser(

@@ -7,6 +7,8 @@
         w.set_groundtruth(frames)
 
 The same calls give byte-identical files: no wall-clock time is written anywhere.
+`write_vehicle_can` writes speed and yaw rate the same way for importers that have them
+from elsewhere (the radar, core.radar_ego).
 
 Notes:
     python-can's BLFWriter puts the first frame's time in the file header and stores frame
@@ -20,6 +22,7 @@ from __future__ import annotations
 import math
 import shutil
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from types import TracebackType
@@ -111,6 +114,72 @@ def vehicle_dbc_path() -> Path:
     return Path(str(resources.files("core.io") / "data" / DBC_NAME))
 
 
+@dataclass(frozen=True)
+class VehicleState:
+    """One CAN sample: t_ns on the recording clock, speed_mps forward, yaw_rate_radps
+    positive turning left; ValueError unless speed and yaw rate are finite."""
+
+    t_ns: int
+    speed_mps: float
+    yaw_rate_radps: float
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.speed_mps) and math.isfinite(self.yaw_rate_radps)):
+            raise ValueError(
+                "speed_mps, yaw_rate_radps: expected finite numbers, "
+                f"got {self.speed_mps}, {self.yaw_rate_radps}"
+            )
+
+
+def write_vehicle_can(
+    folder: Path, samples: Sequence[VehicleState], yaw_rate_bias: str = "none"
+) -> CanSource:
+    """Write `samples` as the synthetic car's CAN bus into `folder`; the manifest's section.
+
+    Writes DBC_NAME (a copy of vehicle_dbc_path()) and CAN_LOG, a BLF log with one SPEED
+    frame (its ENCODER counting the samples in the order given) and one KINEMATICS frame per
+    sample, in time order, quantised as the DBC says; values beyond the DBC's range are
+    clipped to it. Returns the CanSource that reads them back (SPEED_SIGNAL,
+    YAW_RATE_SIGNAL, `yaw_rate_bias`).
+    """
+    shutil.copyfile(vehicle_dbc_path(), folder / DBC_NAME)
+    db = load_dbc([folder / DBC_NAME])
+    speed_msg = db.get_message_by_name(SPEED_SIGNAL.message)
+    yaw_msg = db.get_message_by_name(YAW_RATE_SIGNAL.message)
+    speed_sig = speed_msg.get_signal_by_name(SPEED_SIGNAL.signal)
+    yaw_sig = yaw_msg.get_signal_by_name(YAW_RATE_SIGNAL.signal)
+    frames: list[tuple[int, int, bytes]] = []
+    for k, s in enumerate(samples):
+        kmh = float(np.clip(s.speed_mps / SPEED_SIGNAL.to_si, speed_sig.minimum, speed_sig.maximum))
+        degs = float(
+            np.clip(s.yaw_rate_radps / YAW_RATE_SIGNAL.to_si, yaw_sig.minimum, yaw_sig.maximum)
+        )
+        counter = k % COUNTER_MODULO
+        speed_data = speed_msg.encode({SPEED_SIGNAL.signal: kmh, SPEED_COUNTER: counter})
+        yaw_data = yaw_msg.encode({YAW_RATE_SIGNAL.signal: degs})
+        frames.append((int(s.t_ns), speed_msg.frame_id, bytes(speed_data)))
+        frames.append((int(s.t_ns), yaw_msg.frame_id, bytes(yaw_data)))
+    writer = can.BLFWriter(folder / CAN_LOG)
+    writer.start_timestamp = 0.0  # see the module Notes
+    for t_ns, frame_id, data in sorted(frames, key=lambda f: f[0]):
+        writer.on_message_received(
+            can.Message(
+                timestamp=t_ns / 1e9,
+                arbitration_id=frame_id,
+                data=data,
+                is_extended_id=False,
+                channel=0,
+            )
+        )
+    writer.stop()
+    return CanSource(
+        CanBus(dbc=(DBC_NAME,), log=CAN_LOG),
+        SPEED_SIGNAL,
+        YAW_RATE_SIGNAL,
+        yaw_rate_bias=yaw_rate_bias,
+    )
+
+
 class RecordingWriter:
     """Writes one recording folder; a context manager (the files are complete after close)."""
 
@@ -136,7 +205,7 @@ class RecordingWriter:
         self.generator = dict(generator or {})
         self.calibration = calibration
         self._truth: list[FrameTruth] | None = None
-        self._can_frames: list[tuple[int, int, bytes]] = []
+        self._vehicle: list[VehicleState] = []
         self._closed = False
 
         store = radar_msgs.typestore()
@@ -148,12 +217,6 @@ class RecordingWriter:
             MAX_BAG_FILE_BYTES,
             version=BAG_VERSION,
         )
-
-        shutil.copyfile(vehicle_dbc_path(), self.out_dir / DBC_NAME)
-        db = load_dbc([self.out_dir / DBC_NAME])
-        self._speed_msg = db.get_message_by_name(SPEED_SIGNAL.message)
-        self._yaw_msg = db.get_message_by_name(YAW_RATE_SIGNAL.message)
-        self._counter = 0
 
     # --- context manager ----------------------------------------------------------------
     def __enter__(self) -> RecordingWriter:
@@ -203,56 +266,21 @@ class RecordingWriter:
         )
 
     def add_vehicle_state(self, t_ns: int, speed_mps: float, yaw_rate_radps: float) -> None:
-        """Add one SPEED and one KINEMATICS CAN frame at `t_ns`, quantised as the DBC says.
-
-        Values beyond the DBC's range are clipped to it.
-        """
-        if not (math.isfinite(speed_mps) and math.isfinite(yaw_rate_radps)):
-            raise ValueError(
-                "speed_mps, yaw_rate_radps: expected finite numbers, "
-                f"got {speed_mps}, {yaw_rate_radps}"
-            )
-        speed_sig = self._speed_msg.get_signal_by_name(SPEED_SIGNAL.signal)
-        yaw_sig = self._yaw_msg.get_signal_by_name(YAW_RATE_SIGNAL.signal)
-        kmh = float(np.clip(speed_mps / SPEED_SIGNAL.to_si, speed_sig.minimum, speed_sig.maximum))
-        degs = float(
-            np.clip(yaw_rate_radps / YAW_RATE_SIGNAL.to_si, yaw_sig.minimum, yaw_sig.maximum)
-        )
-        speed_data = self._speed_msg.encode(
-            {SPEED_SIGNAL.signal: kmh, SPEED_COUNTER: self._counter}
-        )
-        yaw_data = self._yaw_msg.encode({YAW_RATE_SIGNAL.signal: degs})
-        self._counter = (self._counter + 1) % COUNTER_MODULO
-        self._can_frames.append((int(t_ns), self._speed_msg.frame_id, bytes(speed_data)))
-        self._can_frames.append((int(t_ns), self._yaw_msg.frame_id, bytes(yaw_data)))
+        """Add one SPEED and one KINEMATICS CAN frame at `t_ns` (see write_vehicle_can)."""
+        self._vehicle.append(VehicleState(int(t_ns), speed_mps, yaw_rate_radps))
 
     def set_groundtruth(self, frames: Sequence[FrameTruth]) -> None:
         """Ground truth per camera frame (written to groundtruth.json on close)."""
         self._truth = list(frames)
 
     # --- finish -------------------------------------------------------------------------
-    def _write_can(self) -> None:
-        writer = can.BLFWriter(self.out_dir / CAN_LOG)
-        writer.start_timestamp = 0.0  # see the module Notes
-        for t_ns, frame_id, data in sorted(self._can_frames, key=lambda f: f[0]):
-            writer.on_message_received(
-                can.Message(
-                    timestamp=t_ns / 1e9,
-                    arbitration_id=frame_id,
-                    data=data,
-                    is_extended_id=False,
-                    channel=0,
-                )
-            )
-        writer.stop()
-
     def close(self) -> None:
         """Finish the bag and write the CAN log, calibration, ground truth and manifest."""
         if self._closed:
             return
         self._closed = True
         self._bag.close()
-        self._write_can()
+        can_source = write_vehicle_can(self.out_dir, self._vehicle, self.yaw_rate_bias)
         save_calibration(self.calibration, self.out_dir / CALIBRATION_NAME)
         if self._truth is not None:
             write_groundtruth(self._truth, self.out_dir / GROUNDTRUTH_NAME)
@@ -263,12 +291,7 @@ class RecordingWriter:
             generator=self.generator,
             camera=BagStream(BAG_DIR, CAMERA_TOPIC),
             radar=BagStream(BAG_DIR, RADAR_TOPIC),
-            can=CanSource(
-                CanBus(dbc=(DBC_NAME,), log=CAN_LOG),
-                SPEED_SIGNAL,
-                YAW_RATE_SIGNAL,
-                yaw_rate_bias=self.yaw_rate_bias,
-            ),
+            can=can_source,
             calibration=CALIBRATION_NAME,
             groundtruth=GROUNDTRUTH_NAME if self._truth is not None else None,
         )

@@ -17,9 +17,11 @@ from core.io.importers.finish import (
     ImportResult,
     Progress,
     assumption_notes,
+    check_ego_from_radar,
     check_out_dir,
     result,
     staging,
+    write_ego_from_radar,
     write_manifest,
 )
 from core.io.manifest import BagStream, RadarCanSource
@@ -59,7 +61,8 @@ def import_bag(
 
     Topics not named are found by message type (camera: Image or CompressedImage; radar:
     RadarScan or RadarTracks, optional; CAN: can_msgs/Frame when `can_spec` has no log). The
-    bag's images are used at their own size: the calibration must be for that size.
+    bag's images are used at their own size: the calibration must be for that size. With
+    `options.ego_from_radar` the speed is estimated from the radar (finish.write_ego_from_radar).
     """
     check_out_dir(out_dir)
     if not bag_path.exists():
@@ -88,6 +91,7 @@ def import_bag(
     )
     if prepared is not None and prepared.radar is not None:
         radar = prepared.radar
+    check_ego_from_radar(options, prepared, radar is not None, bag_path)
     built = build_calibration(calibration, size, size, radar is not None, "the bag's images are")
     notes.extend(built.notes)
     if prepared is not None:
@@ -123,4 +127,7 @@ def import_bag(
             assumption_text=assumption_text,
             options=options,
         )
+        if options.ego_from_radar:
+            manifest, note = write_ego_from_radar(manifest, built.calibration, bag_path)
+            notes.append(note)
     return result(out_dir, times_ns, size, built, manifest, notes)

@@ -8,7 +8,9 @@ written beside OUT_DIR under a temporary name and renamed at the end, so an erro
 nothing behind; OUT_DIR must be new or empty.
 
 Where nothing records the speed, `Assumptions` (a constant speed and yaw rate) go into the
-manifest; without either, speed is NaN and the engine's motion stereo cannot work.
+manifest, or `--ego-from-radar` estimates the speed from the recording's own radar scans
+(core.radar_ego) and writes it as CAN frames (`write_ego_from_radar`); without either,
+speed is NaN and the engine's motion stereo cannot work.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from core.io.drive import Drive
 from core.io.errors import RecordingError
 from core.io.importers.calibration_spec import BuiltCalibration
 from core.io.importers.can_mapping import PreparedCan
+from core.io.index import build_index
 from core.io.manifest import (
     MANIFEST_NAME,
     Assumptions,
@@ -42,7 +45,17 @@ from core.io.manifest import (
     save_manifest,
 )
 from core.io.split_bag import SplitBagWriter
-from core.io.writer import BAG_DIR, CALIBRATION_NAME, CAMERA_TOPIC, MAX_BAG_FILE_BYTES
+from core.io.writer import (
+    BAG_DIR,
+    CALIBRATION_NAME,
+    CAMERA_TOPIC,
+    CAN_LOG,
+    DBC_NAME,
+    MAX_BAG_FILE_BYTES,
+    VehicleState,
+    write_vehicle_can,
+)
+from core.radar_ego import RadarEgoParams, speeds_from_scans
 
 GreyImage = npt.NDArray[np.uint8]
 Progress = Callable[[int, int], None]
@@ -57,15 +70,23 @@ class ImportOptions:
 
     name: the recording's name (None: the source file's stem); assumptions: constants where
     nothing records the speed or yaw rate; max_radar_skew_ms: how far (ms) a radar scan may
-    lie from a camera frame and still be paired with it (None: the Drive's default).
+    lie from a camera frame and still be paired with it (None: the Drive's default);
+    ego_from_radar: the speed estimated from the recording's radar (write_ego_from_radar),
+    for recordings that record none.
     """
 
     name: str | None = None
     assumptions: Assumptions = field(default_factory=Assumptions)
     max_radar_skew_ms: float | None = None
+    ego_from_radar: bool = False
 
     def __post_init__(self) -> None:
         a = self.assumptions
+        if self.ego_from_radar and a != Assumptions():
+            raise ValueError(
+                "--ego-from-radar: not with --assume-speed-mps or --assume-yaw-rate-radps; it "
+                "writes the speed it estimates and a yaw rate of 0 (give one or the other)"
+            )
         for flag, value in (
             ("--assume-speed-mps", a.speed_mps),
             ("--assume-yaw-rate-radps", a.yaw_rate_radps),
@@ -154,7 +175,11 @@ def assumption_notes(
         )
     if text:
         text += "."
-    if a.speed_mps is None and (prepared is None or prepared.can is None):
+    if (
+        a.speed_mps is None
+        and not options.ego_from_radar
+        and (prepared is None or prepared.can is None)
+    ):
         notes.append(
             "no speed: nothing records it and --assume-speed-mps is not given, so speed is NaN "
             "and the engine's motion stereo cannot work"
@@ -205,6 +230,85 @@ def write_manifest(
     )
     save_manifest(manifest, tmp / MANIFEST_NAME)
     return manifest
+
+
+def check_ego_from_radar(
+    options: ImportOptions, prepared: PreparedCan | None, has_radar: bool, source: Path
+) -> None:
+    """Before anything is written: ValueError naming --ego-from-radar when it is asked of a
+    recording without radar, with CAN speed (the mapping's `can:` section), or with a CAN
+    file that would take the name of a file it writes. (With assumptions: ImportOptions.)"""
+    if not options.ego_from_radar:
+        return
+    if prepared is not None and prepared.can is not None:
+        raise ValueError(
+            "--ego-from-radar: the mapping's `can:` section records speed and yaw rate; "
+            "--ego-from-radar is for recordings without them"
+        )
+    taken = sorted({CAN_LOG, DBC_NAME} & set(prepared.files if prepared is not None else ()))
+    if prepared is not None and taken:
+        raise ValueError(
+            f"--ego-from-radar: writes {taken[0]}, and a CAN file of that name is copied into "
+            f"the recording ({prepared.files[taken[0]]}); rename the file"
+        )
+    if not has_radar:
+        raise ValueError(
+            f"--ego-from-radar: {source} gives no radar to estimate the speed from (no radar "
+            "topic, no `radar:` section in the mapping)"
+        )
+
+
+def write_ego_from_radar(
+    manifest: Manifest,
+    calibration: Calibration,
+    source: Path,
+) -> tuple[Manifest, str]:
+    """The speed from the staged recording's radar scans, written into it as CAN.
+
+    manifest: as write_manifest wrote it into the staging folder (radar, no CAN speed;
+    check_ego_from_radar passed). Each scan's speed (core.radar_ego.speeds_from_scans with
+    the default RadarEgoParams) becomes one CAN sample at the scan's stamp with a yaw rate of
+    0 (the radar gives none usable: core/radar_ego.py Notes), written by
+    core.io.writer.write_vehicle_can; scans without a fit are left out (the Drive
+    interpolates between samples). The manifest is saved again with that `can:` section
+    and its description extended. Returns it and a note for the person importing;
+    RecordingError naming `source` when no scan gives a speed.
+    """
+    params = RadarEgoParams()
+    scans = build_index(manifest).radar
+    if scans is None or len(scans.t_ns) == 0:
+        raise RecordingError(f"{source}: --ego-from-radar: the recording holds no radar scan")
+    speeds = speeds_from_scans(
+        scans.range_rate_mps,
+        scans.azimuth_rad,
+        scans.start,
+        calibration.radar_mount.yaw_rad,
+        params,
+        range_m=scans.range_m,
+    )
+    fitted = np.flatnonzero(np.isfinite(speeds))
+    if fitted.size == 0:
+        raise RecordingError(
+            f"{source}: --ego-from-radar: none of the radar's {len(speeds)} scans has "
+            f"{params.min_stationary} stationary returns at distinct places agreeing on one "
+            "speed (core/radar_ego.py); give the speed another way (CAN, --assume-speed-mps)"
+        )
+    samples = [VehicleState(int(scans.t_ns[k]), float(speeds[k]), 0.0) for k in fitted]
+    can = write_vehicle_can(manifest.folder, samples)
+    low, high = float(speeds[fitted].min()), float(speeds[fitted].max())
+    text = (
+        f"Speed estimated from the radar's stationary returns (core.radar_ego) on "
+        f"{fitted.size} of {len(speeds)} scans, written as CAN ({CAN_LOG}, {DBC_NAME}); "
+        "yaw rate not recorded: 0 (the radar gives no usable yaw rate)."
+    )
+    manifest = replace(manifest, can=can, description=join_text(manifest.description, text))
+    save_manifest(manifest, manifest.folder / MANIFEST_NAME)
+    note = (
+        f"speed from the radar's stationary returns on {fitted.size} of {len(speeds)} scans "
+        f"({low:.1f}-{high:.1f} m/s; between them the speed is interpolated); yaw rate not "
+        "recorded: 0, the radar gives no usable yaw rate (core/radar_ego.py Notes)"
+    )
+    return manifest, note
 
 
 def recording_name(options: ImportOptions, source: Path) -> str:
