@@ -307,7 +307,11 @@ def import_aimotive(
     counts = np.array([0] + [len(s) for s in scans], dtype=np.int64)
     rows = [t for s in scans for t in s]
     speeds = speeds_from_scans(
-        [r[2] for r in rows], [r[1] for r in rows], np.cumsum(counts), mount.yaw_rad
+        [r[2] for r in rows],
+        [r[1] for r in rows],
+        np.cumsum(counts),
+        mount.yaw_rad,
+        range_m=[r[0] for r in rows],
     )
     fitted = np.isfinite(speeds)
     if not fitted.any():
