@@ -237,7 +237,7 @@ def _options(args: argparse.Namespace) -> ImportOptions:
         name=args.name,
         assumptions=Assumptions(args.assume_speed_mps, args.assume_yaw_rate_radps),
         max_radar_skew_ms=args.max_radar_skew_ms,
-        ego_from_radar=getattr(args, "ego_from_radar", False),
+        ego_from_radar=args.ego_from_radar,
     )
 
 
@@ -1010,6 +1010,13 @@ def _common_import_args(p: argparse.ArgumentParser) -> None:
         "speed is NaN and motion stereo cannot work)",
     )
     a.add_argument(
+        "--ego-from-radar",
+        action="store_true",
+        help="without CAN speed: estimate the speed from the radar's stationary returns and "
+        "write it into the recording as CAN frames, yaw rate 0 (the radar gives none usable); "
+        "needs a radar that reports the roadside (detections), not only tracked vehicles",
+    )
+    a.add_argument(
         "--assume-yaw-rate-radps",
         metavar="RADPS",
         type=_finite,
@@ -1200,12 +1207,6 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _can_args(bag, from_bag=True)
     _common_import_args(bag)
-    bag.add_argument(
-        "--ego-from-radar",
-        action="store_true",
-        help="without CAN speed: estimate the speed from the radar's stationary returns and "
-        "write it into the recording as CAN frames, yaw rate 0 (the radar gives none usable)",
-    )
     bag.set_defaults(func=_cmd_import)
 
     nuscenes = kinds.add_parser(

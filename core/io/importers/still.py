@@ -19,11 +19,13 @@ from core.io.importers.finish import (
     ImportResult,
     assumption_notes,
     camera_bag,
+    check_ego_from_radar,
     check_out_dir,
     output_size,
     result,
     staging,
     to_grey,
+    write_ego_from_radar,
     write_manifest,
 )
 from core.io.manifest import BagStream
@@ -63,6 +65,7 @@ def import_still(
     source_size = (frame.shape[1], frame.shape[0])
     out_size = output_size(width_px, source_size)
     has_radar = prepared is not None and prepared.radar is not None
+    check_ego_from_radar(options, prepared, has_radar, image_path)
     built = build_calibration(calibration, source_size, out_size, has_radar, "the image is")
     notes.extend(built.notes)
     if prepared is not None:
@@ -89,4 +92,7 @@ def import_still(
             assumption_text=assumption_text,
             options=options,
         )
+        if options.ego_from_radar:
+            manifest, note = write_ego_from_radar(manifest, built.calibration, image_path)
+            notes.append(note)
     return result(out_dir, [t_ns], out_size, built, manifest, notes)

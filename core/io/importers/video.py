@@ -32,11 +32,13 @@ from core.io.importers.finish import (
     Progress,
     assumption_notes,
     camera_bag,
+    check_ego_from_radar,
     check_out_dir,
     output_size,
     result,
     staging,
     to_grey,
+    write_ego_from_radar,
     write_manifest,
 )
 from core.io.manifest import BagStream
@@ -177,6 +179,7 @@ def import_video(
         source_size = (v.width_px, v.height_px)
         out_size = output_size(sampling.width_px, source_size)
         has_radar = prepared is not None and prepared.radar is not None
+        check_ego_from_radar(options, prepared, has_radar, video)
         built = build_calibration(calibration, source_size, out_size, has_radar, "the video is")
         notes.extend(built.notes)
         total = _planned_count(v, sampling)
@@ -225,6 +228,9 @@ def import_video(
                 assumption_text=assumption_text,
                 options=options,
             )
+            if options.ego_from_radar:
+                manifest, note = write_ego_from_radar(manifest, built.calibration, video)
+                notes.append(note)
     finally:
         v.capture.release()
     return result(out_dir, stamps, out_size, built, manifest, notes)
