@@ -33,10 +33,14 @@ Notes:
     camera bends a vertical edge at u = 1100 of 1280 by 10 px over 400 rows and moves the
     image's side edges by 56 px (78 px in the corners), so it is undistorted at import;
     the recording's camera is the undistorted pinhole, and the 3D boxes project onto it.
-    The radar's elevation is ignored: with it, the points project 15-40 px below the
-    vehicles they belong to (their median height is 0.9 m below the box bottoms, the
-    shared data's README measured), while range and azimuth on a flat road put them on
-    the vehicles (tests/core/io/importers/test_aimotive.py measures both).
+    The radar's elevation is ignored. On the night motorway's radar-seen vehicles (119,
+    193 points on them; tests/core/io/importers/test_aimotive.py measures it): turned into
+    the body frame by the radar's full mount rotation (it looks 0.85 deg down), the points
+    lie a median 0.95 m below the box bottoms and project a median 16 px below them
+    (10-90 %: -1 to 36 px, in the camera's 1280 px), inside the box for 18 vehicles;
+    taken as the mount's height + range * sin(elevation), they lie a median 0.21 m below
+    the bottoms, scattered -15 to +22 px about the bottom edge, inside for 64. Range and
+    azimuth on a flat road, drawn 0.5 m up, put a point inside the box for 115 of 119.
 """
 
 from __future__ import annotations
