@@ -342,6 +342,26 @@ def ego_signals(
     return np.round(grid * 1e6).astype(np.int64), speed, yaw_rate
 
 
+def _ego_in_span(
+    t: _Tables, span_us: tuple[int, int]
+) -> tuple[npt.NDArray[np.int64], FloatArray, FloatArray]:
+    """ego_signals of every ego pose within `span_us`; RecordingError naming ego_pose.json and
+    the pose when one cannot be read."""
+    times, xy, heading = [], [], []
+    where = t.folder / "ego_pose.json"
+    for row in t.rows["ego_pose"]:
+        try:
+            t_us = int(row["timestamp"])
+        except (KeyError, TypeError, ValueError) as err:
+            raise RecordingError(f"{where}: {row.get('token')}: no integer timestamp") from err
+        if span_us[0] <= t_us <= span_us[1]:
+            pose = _Pose.of(row, f"{where}: {row.get('token')}")
+            times.append(t_us)
+            xy.append(pose.t[:2])
+            heading.append(yaw_rad(pose.R))
+    return ego_signals(times, np.reshape(xy, (-1, 2)), heading)
+
+
 def _nearest(rows: Sequence[_Row], t_us: int) -> _Row | None:
     """The row nearest `t_us` within MAX_RADAR_GAP_MS, None when none is."""
     best = min(rows, key=lambda r: abs(r.t_us - t_us), default=None)
@@ -432,7 +452,7 @@ def _annotation_boxes(
                 hidden=HIDDEN_BY_VISIBILITY.get(str(a.get("visibility_token")), 0.0),
             )
         except (RecordingError, ValueError, TypeError, KeyError) as err:
-            skipped.bad_annotations.append(f"{a.get('token')}: {err}")
+            skipped.bad_annotations.append(str(err))
             continue
         out.append(box)
     return out
@@ -549,13 +569,7 @@ def import_nuscenes(
 
     t0_us = cameras[0].t_us
     span = (cameras[0].t_us - 1_000_000, cameras[-1].t_us + 1_000_000)
-    poses = [p for p in tables.rows["ego_pose"] if span[0] <= int(p["timestamp"]) <= span[1]]
-    pose_R = [quaternion_matrix(p["rotation"]) for p in poses]
-    ego_t, speed, yaw_rate = ego_signals(
-        [int(p["timestamp"]) for p in poses],
-        [p["translation"][:2] for p in poses],
-        [yaw_rad(R) for R in pose_R],
-    )
+    ego_t, speed, yaw_rate = _ego_in_span(tables, span)
     track_ids: dict[str, int] = {}
     truths: list[FrameTruth] = []
     hz = 1e6 / float(np.median(np.diff([c.t_us for c in cameras]))) if len(cameras) > 1 else 0.0

@@ -595,6 +595,30 @@ def test_camera_not_there_lists_the_sensors(
     assert "the sensors there: CAM_FRONT, RADAR_FRONT" in err
 
 
+@pytest.mark.parametrize(
+    ("field", "value", "problem"),
+    [
+        ("rotation", [0, 0, 0, 0], "rotation: expected a quaternion"),
+        ("timestamp", None, "no integer"),
+    ],
+)
+def test_an_unreadable_ego_pose_is_named(
+    synthetic: Synthetic,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    field: str,
+    value: object,
+    problem: str,
+) -> None:
+    # a pose of a sweep whose file is absent: read only for the speed and yaw rate
+    path = synthetic.tables / "ego_pose.json"
+    rows = json.loads(path.read_text())
+    rows[1][field] = value
+    path.write_text(json.dumps(rows))
+    err = _fails(synthetic, tmp_path, capsys)
+    assert f"{path}: {rows[1]['token']}: {problem}" in err
+
+
 def test_damaged_pcd_header(
     synthetic: Synthetic, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -621,7 +645,7 @@ def test_label_with_nan_is_left_out_and_noted(
     assert main(_synthetic_args(synthetic, out)) == 0
     printed = capsys.readouterr().out
     assert "note: 1 annotations that cannot be used, left out: " in printed
-    assert f"{path}: {bad}: translation: expected 3 finite numbers" in printed
+    assert f"left out: {path}: {bad}: translation: expected 3 finite numbers" in printed
     with Drive(out) as drive:
         objects = [len(t.objects) if (t := drive.truth(i)) else None for i in range(len(drive))]
     assert [objects[i] for i in range(0, CAMERA_ROWS, KEY_EVERY)] == [1, 0, 1]
