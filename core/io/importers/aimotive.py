@@ -71,6 +71,7 @@ from core.io.importers.finish import (
     Progress,
     check_out_dir,
     output_size,
+    result,
     staging,
     to_grey,
 )
@@ -403,17 +404,5 @@ def import_aimotive(
         f"ground truth on {len(truths)} of {len(frames)} frames (no true pitch, no guard-rail "
         "polylines: the labels have neither)"
     )
-    manifest = load_manifest(out_dir)
-    first_t = times[frames[0].frame_id] - t0
-    last_t = times[frames[-1].frame_id] - t0
-    return ImportResult(
-        out_dir,
-        len(frames),
-        size[0],
-        size[1],
-        first_t,
-        last_t,
-        calibration,
-        manifest,
-        tuple(notes),
-    )
+    frame_t_ns = [times[f.frame_id] - t0 for f in frames]
+    return result(out_dir, frame_t_ns, size, calibration, load_manifest(out_dir), notes)

@@ -130,4 +130,4 @@ def import_bag(
         if options.ego_from_radar:
             manifest, note = write_ego_from_radar(manifest, built.calibration, bag_path)
             notes.append(note)
-    return result(out_dir, times_ns, size, built, manifest, notes)
+    return result(out_dir, times_ns, size, built.calibration, manifest, notes)

@@ -325,7 +325,7 @@ def result(
     out_dir: Path,
     stamps: Sequence[int],
     size: tuple[int, int],
-    built: BuiltCalibration,
+    calibration: Calibration,
     manifest: Manifest,
     notes: Sequence[str],
 ) -> ImportResult:
@@ -337,7 +337,7 @@ def result(
         size[1],
         stamps[0],
         stamps[-1],
-        built.calibration,
+        calibration,
         replace(manifest, folder=out_dir),
         tuple(notes),
     )

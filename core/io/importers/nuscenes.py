@@ -71,6 +71,7 @@ from core.io.importers.finish import (
     Progress,
     check_out_dir,
     output_size,
+    result,
     staging,
     to_grey,
 )
@@ -632,16 +633,5 @@ def import_nuscenes(
                     progress(k + 1, len(cameras))
             w.set_groundtruth(truths)
     notes = _notes(skipped, len(cameras), len(truths), radars)
-    manifest = load_manifest(out_dir)
     stamps = [(c.t_us - t0_us) * NS_PER_US for c in cameras]
-    return ImportResult(
-        out_dir,
-        len(stamps),
-        size[0],
-        size[1],
-        stamps[0],
-        stamps[-1],
-        calibration,
-        manifest,
-        tuple(notes),
-    )
+    return result(out_dir, stamps, size, calibration, load_manifest(out_dir), notes)

@@ -95,4 +95,4 @@ def import_still(
         if options.ego_from_radar:
             manifest, note = write_ego_from_radar(manifest, built.calibration, image_path)
             notes.append(note)
-    return result(out_dir, [t_ns], out_size, built, manifest, notes)
+    return result(out_dir, [t_ns], out_size, built.calibration, manifest, notes)

@@ -233,4 +233,4 @@ def import_video(
                 notes.append(note)
     finally:
         v.capture.release()
-    return result(out_dir, stamps, out_size, built, manifest, notes)
+    return result(out_dir, stamps, out_size, built.calibration, manifest, notes)
