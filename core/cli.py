@@ -23,6 +23,7 @@ if TYPE_CHECKING:
 
 DEFAULT_RECORDINGS = Path(__file__).resolve().parents[1] / "recordings"
 DEFAULT_RECORDING = "highway"
+PARAMS_HELP = "parameter file, or `papers` for the papers' pipeline (default: the defaults)"
 
 
 class ProgressBar:
@@ -486,12 +487,12 @@ def _cmd_info(args: argparse.Namespace) -> int:
 def _cmd_run(args: argparse.Namespace) -> int:
     from core.io.drive import Drive
     from core.io.errors import RecordingError
-    from core.params import Params, load_params
+    from core.params import params_from
     from core.results import write_results
 
     out_path: Path | None = args.out
     try:
-        params = load_params(args.params) if args.params else Params()
+        params = params_from(args.params)
         if out_path is not None:
             _check_out_folder(out_path)
         with Drive(args.recording) as drive:
@@ -517,17 +518,31 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from core.evaluation import report
     from core.evaluation.evaluate import evaluate_recording, total
     from core.io.errors import RecordingError
-    from core.params import Params, ParamsError, load_params
+    from core.params import ParamsError, params_from
 
     try:
-        params = load_params(args.params) if args.params else Params()
-        reports = []
+        if args.compare is not None and args.format not in ("table", "markdown"):
+            raise ValueError(f"--compare: prints a table or markdown, not {args.format}")
+        params = params_from(args.params)
+        other = params_from(args.compare) if args.compare is not None else None
+        reports, others = [], []
         for path in args.recordings:
             bar = ProgressBar(f"evaluate {path.name}")
             reports.append(evaluate_recording(path, params, bar, baselines=args.baselines))
+            if other is not None:
+                bar = ProgressBar(f"evaluate {path.name} ({args.compare})")
+                others.append(evaluate_recording(path, other, bar, timing=False))
     except (RecordingError, ParamsError, ValueError, OSError) as err:
         print(f"fusionscope evaluate: {err}", file=sys.stderr)
         return 2
+    if other is not None:
+        names = (args.params or "defaults", args.compare)
+        table = report.comparison(names, (reports, others))
+        if args.format == "markdown":
+            sys.stdout.write(report.format_markdown([table]))
+        else:
+            sys.stdout.write(report.format_text([table]))
+        return 0
     summed = total(reports)
     if args.format == "json":
         print(json.dumps(report.as_json(reports, summed), indent=1))
@@ -544,11 +559,11 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 def _cmd_bench(args: argparse.Namespace) -> int:
     from core.bench import STAGES, bench, format_json, format_table
     from core.io.errors import RecordingError
-    from core.params import Params, ParamsError, load_params
+    from core.params import ParamsError, params_from
 
     stages = args.stage or STAGES
     try:
-        params = load_params(args.params) if args.params else Params()
+        params = params_from(args.params)
     except (ParamsError, OSError) as err:
         print(f"fusionscope bench: --params: {err}", file=sys.stderr)
         return 2
@@ -689,7 +704,7 @@ def _export_clip(
     exits 130."""
     from core.io.drive import Drive
     from core.io.errors import RecordingError
-    from core.params import Params, load_params
+    from core.params import Params, params_from
 
     command = f"fusionscope {verb}"
     failures: tuple[type[Exception], ...] = (_UsageError, ValueError, RecordingError, OSError)
@@ -699,7 +714,7 @@ def _export_clip(
         sets = []
         for flag, path in (("--params", args.params), ("--ab", args.ab)):
             try:
-                sets.append(load_params(path) if path else None)
+                sets.append(params_from(path) if path else None)
             except ValueError as err:
                 raise _UsageError(f"{flag}: {err}") from err
         with Drive(args.recording) as drive:
@@ -798,9 +813,7 @@ def _clip_args(p: argparse.ArgumentParser) -> None:
         help="end of the clip, seconds from the drive's first frame, included (default: the "
         "last frame)",
     )
-    p.add_argument(
-        "--params", type=Path, metavar="FILE", help="parameter file (default: the papers')"
-    )
+    p.add_argument("--params", metavar="FILE", help=PARAMS_HELP)
     p.add_argument(
         "--ab",
         type=Path,
@@ -1362,7 +1375,7 @@ def build_parser() -> argparse.ArgumentParser:
         ),
     )
     run.add_argument("recording", type=Path, help="a recording folder")
-    run.add_argument("--params", type=Path, help="parameter file (default: the papers')")
+    run.add_argument("--params", metavar="FILE", help=PARAMS_HELP)
     run.add_argument("--out", type=Path, help="JSON-lines file to write (default: standard output)")
     run.set_defaults(func=_cmd_run)
 
@@ -1378,7 +1391,13 @@ def build_parser() -> argparse.ArgumentParser:
         ),
     )
     evaluate.add_argument("recordings", type=Path, nargs="+", help="recording folders")
-    evaluate.add_argument("--params", type=Path, help="parameter file (default: the papers')")
+    evaluate.add_argument("--params", metavar="FILE", help=PARAMS_HELP)
+    evaluate.add_argument(
+        "--compare",
+        metavar="FILE",
+        help="also evaluate under these parameters (a file, or `papers`) and print only the "
+        "headline figures of both side by side",
+    )
     evaluate.add_argument("--format", choices=("table", "markdown", "csv", "json"), default="table")
     evaluate.add_argument(
         "--baselines",
@@ -1420,7 +1439,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=DEFAULT_RECORDINGS / DEFAULT_RECORDING,
         help=f"recording whose frames are used (default: the bundled {DEFAULT_RECORDING})",
     )
-    bench.add_argument("--params", type=Path, help="parameter file (default: the papers')")
+    bench.add_argument("--params", metavar="FILE", help=PARAMS_HELP)
     bench.add_argument(
         "--frames", type=_int_at_least(2), default=20, help="frames used (default: 20)"
     )

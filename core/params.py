@@ -597,6 +597,23 @@ def save_params(params: Params, path: Path | str) -> None:
     Path(path).write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
 
 
+# Built-in parameter sets by name, each a YAML file in core/presets/: "papers", the papers'
+# pipeline pinned before the defaults departed from it (its header says what it holds).
+PRESETS_DIR = Path(__file__).with_name("presets")
+BUILTIN_PRESETS = ("papers",)
+
+
+def params_from(spec: str | Path | None) -> Params:
+    """The parameters `--params` names: None the defaults; a built-in preset's name
+    (BUILTIN_PRESETS; give a file of that name as ./NAME.yaml or by another path); else a
+    parameter file. ParamsError naming the file or the field."""
+    if spec is None:
+        return Params()
+    if str(spec) in BUILTIN_PRESETS:
+        return load_params(PRESETS_DIR / f"{spec}.yaml")
+    return load_params(spec)
+
+
 def load_params(path: Path | str) -> Params:
     """Read a YAML parameter file; raises ParamsError naming the file and the field."""
     p = Path(path)

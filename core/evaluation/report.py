@@ -18,14 +18,14 @@ import csv
 import io
 import math
 from collections import defaultdict
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from core.bench import PAPER_002_MS
 
 from .baselines import Timing
-from .evaluate import PEDESTRIAN_STAGES, RecordingReport, error_listings
+from .evaluate import PEDESTRIAN_STAGES, RecordingReport, error_listings, total
 from .mot import MotScore
 from .objects import BoxScore, MaskScore, PitchScore, RailScore
 from .vehicles import EventStats, FrameStats
@@ -557,6 +557,64 @@ def _mot(m: MotScore) -> str:
     if not m.truth:
         return "-"
     return f"{m.mota:.2f} / {m.motp:.2f} / {m.idf1:.2f}"
+
+
+def _refined_of_supplied(r: RecordingReport) -> str:
+    v = r.vehicles
+    return f"{v.rd / (v.rd + v.fn):.2f}" if v.rd + v.fn else "-"
+
+
+def _rfn_of_framed(r: RecordingReport) -> str:
+    v = r.vehicles
+    framed = v.rd + v.fn + v.rfn
+    return f"{v.rfn / framed:.2f}" if framed else "-"
+
+
+def _fp_per_frame(r: RecordingReport) -> str:
+    return f"{r.vehicles.fp / r.frames:.2f}" if r.frames else "-"
+
+
+def _events_refined(r: RecordingReport) -> str:
+    return f"{r.events.refined_share:.2f}" if r.events.events else "-"
+
+
+def _rail_errors(r: RecordingReport) -> str:
+    g = r.guardrails
+    return f"{_if_rail_truth(g, g.fn)} / {_if_rail_truth(g, g.fp)}"
+
+
+def _vehicle_mota(r: RecordingReport) -> str:
+    m = r.tracking.vehicle_mot
+    return f"{m.mota:.2f}" if m.truth else "-"
+
+
+# The headline figures `evaluate --compare` sets side by side: (name, figure of a report).
+HEADLINE_FIGURES: tuple[tuple[str, Callable[[RecordingReport], str]], ...] = (
+    ("vehicles RD / (RD + FN)", _refined_of_supplied),
+    ("vehicles RFN / framed", _rfn_of_framed),
+    ("vehicle FP per frame", _fp_per_frame),
+    ("events refined", _events_refined),
+    ("vehicles labelled guard rail", lambda r: str(r.guardrails.vehicles_labelled)),
+    ("guard-rail FN / FP", _rail_errors),
+    ("pedestrians recall / precision", lambda r: _rp(r.pedestrians["radar"])),
+    ("pitch RMS deg", lambda r: _deg(r.pitch.rms_deg)),
+    ("tracked vehicles MOTA", _vehicle_mota),
+)
+
+
+def comparison(
+    names: tuple[str, str],
+    reports: tuple[Sequence[RecordingReport], Sequence[RecordingReport]],
+) -> Table:
+    """The headline figures of the same recordings under two parameter sets, one row per
+    recording (and the total) and figure; `names` head the two columns."""
+    a, b = ([*rs, total(rs)] for rs in reports)
+    rows = tuple(
+        (ra.name, figure, value(ra), value(rb))
+        for ra, rb in zip(a, b, strict=True)
+        for figure, value in HEADLINE_FIGURES
+    )
+    return Table(f"Compared: {names[0]} against {names[1]}", ("recording", "figure", *names), rows)
 
 
 def format_text(items: Sequence[Table]) -> str:

@@ -473,3 +473,20 @@ def test_baselines_on_the_command_line(capsys: pytest.CaptureFixture[str]) -> No
     assert main(["evaluate", path, "--baselines"]) == 0
     out = capsys.readouterr().out
     assert "HOG" in out and "Hough" in out and "MOG2" in out and BASELINE_TIMING_TITLE in out
+
+
+def test_compare_sets_the_headline_figures_of_two_parameter_sets_side_by_side(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    stop_and_go = str(DEFAULT_RECORDINGS / "stop_and_go")
+    wide = ["--params", "papers", "--compare", "papers", "--format", "markdown"]
+    assert main(["evaluate", stop_and_go, *wide]) == 0
+    out = capsys.readouterr().out
+    assert "**Compared: papers against papers**" in out
+    rows = [line.split(" | ") for line in out.splitlines() if line.startswith("| stop_and_go")]
+    figures = [name for name, _ in report.HEADLINE_FIGURES]
+    assert [r[1] for r in rows] == figures
+    assert all(r[2] == r[3].rstrip(" |") for r in rows)  # the same set: the same figures
+    assert [line for line in out.splitlines() if line.startswith("| total")]
+    assert main(["evaluate", stop_and_go, "--compare", "papers", "--format", "json"]) == 2
+    assert "--compare: prints a table or markdown, not json" in capsys.readouterr().err
