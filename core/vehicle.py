@@ -33,8 +33,11 @@ the frame's pitch, W wide, W/2 high, cropped at the image border, resampled to a
    two overlap by more than `merge_overlap_fraction` of the smaller one, the larger is kept,
    unless they are of similar size (width ratio >= `similar_size_ratio`) with their bases
    at the same height (within `same_base_fraction` of the box height), which are averaged;
-10. world position: distance from the radar (the targets' x), lateral position and width
-   from vision: the box's bottom corners' rays crossing the vertical plane at that distance.
+   boxes whose targets lie more than `merge_max_gap_m` apart in distance are never merged
+   (beyond the papers, Notes);
+10. world position: distance from the radar (the nearest of the vehicle's targets; the
+   papers' preset: their mean, Notes), lateral position and width from vision: the box's
+   bottom corners' rays crossing the vertical plane at that distance.
    The bird's-eye distance of the box base (its ground point) is kept as `vision_distance_m`.
 
 Coordinates: areas and their matrices in resampled-area pixels (`SearchArea.patch`); boxes
@@ -64,6 +67,18 @@ Notes:
       0.35 W above a vehicle's base, lower than the roof of any car, so the top is found only
       for low objects and the fixed ratio is the rule, as the paper says for trucks. The
       world-size filter therefore checks the width only.
+    - Step 9, beyond the papers: merging by overlap alone made one "vehicle" 6.5-8.4 m
+      wide of a van's box at 35 m and boxes of targets at 80-100 m seen above it (the
+      aiMotive night motorway); boxes now merge only when their targets lie within
+      `merge_max_gap_m` (5 m) of each other in distance, a chain of them for a truck's
+      returns along its length. Step 10: the distance is the nearest target's, not the mean:
+      the nearest return is the one nearest the vehicle's near face (real radars return
+      points all along a vehicle: 0.55 m beyond the labelled rear face on nuScenes, 1.09 m on
+      aiMotive, median). Both together, measured on drives of new seeds (20 s each, seeds
+      101 and 202) and the real drives, RD / (RD + FN): stop_and_go 0.54 -> 0.63 and 0.56 ->
+      0.62, exurban 0.72 -> 0.75 and 0.65 -> 0.66, highway 0.91 -> 0.92 and 0.91, nuScenes
+      scene-0523 0.34 -> 0.40, with the same FP; the same within one vehicle for gaps of
+      1.5 to 5 m. The papers' preset keeps both off (inf, the mean).
     - Step 10: the paper maps the box base to the world by inverse perspective mapping and
       takes the distance from the radar; here lateral position and width come from the
       rays at the radar's distance, so a bottom found a few rows off (pitch, shadow) moves
@@ -284,18 +299,26 @@ def _overlap_of_smaller(a: Box, b: Box) -> float:
     return intersection_area(a, b) / max(min(rect_area(a), rect_area(b)), 1e-9)
 
 
-def merge_boxes(boxes: list[tuple[Box, int]], params: VehicleParams) -> list[tuple[Box, list[int]]]:
+def merge_boxes(
+    boxes: list[tuple[Box, int]], params: VehicleParams, distances_m: Sequence[float] = ()
+) -> list[tuple[Box, list[int]]]:
     """Merge (box, target_index) pairs from several targets (paper 001, II).
 
     Largest first; a box overlapping a kept one by more than `merge_overlap_fraction` of the
     smaller is dropped in its favour, unless the two are of similar width with their bases
     at the same height, when the kept box becomes the mean of the boxes merged into it.
+    distances_m: each radar target's distance, by target index; when given, a box joins a
+    kept one only when its target lies within `merge_max_gap_m` of one of the kept one's.
     Returns (box, target indices) per kept box, largest first.
     """
     order = sorted(boxes, key=lambda bt: -rect_area(bt[0]))
     kept: list[tuple[list[Box], list[int]]] = []  # the boxes averaged into each, their targets
     for box, target in order:
         for members, targets in kept:
+            if distances_m and params.merge_max_gap_m < min(
+                abs(distances_m[target] - distances_m[t]) for t in targets
+            ):
+                continue
             ref = _mean_box(members)
             if _overlap_of_smaller(ref, box) <= params.merge_overlap_fraction:
                 continue
@@ -346,8 +369,9 @@ def detect_vehicles(
         for i, width_m in zip(ids, widths_m, strict=True)
         if _vehicle_wide(width_m, params)
     ]
-    merged = merge_boxes(sized, params)
-    distances_m = [float(np.mean([radar[t].x_m for t in targets])) for _, targets in merged]
+    merged = merge_boxes(sized, params, [t.x_m for t in radar])
+    of_targets = np.min if params.distance_of_nearest_target else np.mean
+    distances_m = [float(of_targets([radar[t].x_m for t in ts])) for _, ts in merged]
     lateral_m, width_m, vision_m = world_extents([b for b, _ in merged], distances_m, camera)
     vehicles = tuple(
         Vehicle(box, distances_m[j], lateral_m[j], width_m[j], vision_m[j], tuple(sorted(ts)))

@@ -289,9 +289,12 @@ def test_two_radar_points_on_one_car_give_one_vehicle(
     result = detect_vehicles(search_areas(image, cam, radar, PARAMS), radar, cam, PARAMS)
     (v,) = result.vehicles
     assert v.target_indices == (0, 1)
-    assert v.distance_m == pytest.approx(20.05)
+    assert v.distance_m == pytest.approx(20.0)  # the nearest target's: nearest the near face
     assert v.width_m == pytest.approx(1.8, abs=0.15)
     assert [r.vehicle_index for r in result.targets] == [0, 0]
+    papers = dataclasses.replace(PARAMS, distance_of_nearest_target=False)
+    (mean,) = detect_vehicles(search_areas(image, cam, radar, papers), radar, cam, papers).vehicles
+    assert mean.distance_m == pytest.approx(20.05)  # the papers': the mean of its targets
 
 
 def test_detect_vehicles_rejects_areas_of_unknown_targets() -> None:
@@ -345,6 +348,21 @@ def test_separate_boxes_stay_separate() -> None:
     a = (100.0, 100.0, 200.0, 180.0)
     b = (300.0, 100.0, 380.0, 164.0)
     assert merge_boxes([(a, 0), (b, 1)], PARAMS) == [(a, [0]), (b, [1])]
+
+
+def test_boxes_of_targets_far_apart_in_distance_are_never_one_vehicle() -> None:
+    big = (100.0, 100.0, 200.0, 180.0)  # a van at 35 m
+    part = (120.0, 110.0, 160.0, 130.0)  # inside it: the box of a target 80 m ahead
+    distances = [35.0, 80.0, 36.0]
+    assert merge_boxes([(part, 1), (big, 0)], PARAMS, distances) == [(big, [0]), (part, [1])]
+    # within the gap of one of the vehicle's targets: merged, a chain along a truck
+    near = (120.0, 140.0, 160.0, 172.0)
+    chain = merge_boxes([(part, 2), (big, 0)], PARAMS, [35.0, 0.0, 39.5])
+    assert chain == [(big, [0, 2])]
+    assert merge_boxes([(near, 1), (big, 0)], PARAMS, distances) == [(big, [0]), (near, [1])]
+    # the papers' merge: by overlap alone
+    papers = dataclasses.replace(PARAMS, merge_max_gap_m=math.inf)
+    assert merge_boxes([(part, 1), (big, 0)], papers, distances) == [(big, [0, 1])]
 
 
 def test_bad_parameters_name_the_field() -> None:
