@@ -559,12 +559,9 @@ def import_nuscenes(
         height_px=source_size[1],
     )
     extrinsics = camera_extrinsics(cameras[0].sensor.R, cameras[0].sensor.t)
-    radar0 = rows[radars[0]][0].sensor if rows[radars[0]] else None
-    mount = RadarMount(
-        float(radar0.t[0]) if radar0 is not None else 0.0,
-        float(radar0.t[1]) if radar0 is not None else 0.0,
-        float(radar0.t[2]) if radar0 is not None else 0.0,
-    )
+    first_radar = rows[radars[0]]  # the virtual radar's place (yaw 0: it looks ahead)
+    x_m, y_m, z_m = (float(v) for v in first_radar[0].sensor.t) if first_radar else (0, 0, 0)
+    mount = RadarMount(x_m, y_m, z_m)
     model = CameraModel(scale_intrinsics(at_source, *size), extrinsics)
     calibration = Calibration(model, mount)
 
