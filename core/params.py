@@ -65,7 +65,10 @@ class PitchParams:
     # lines closer than this to the image vertical are poles, trunks, vehicle sides: no vote
     min_tilt_rad: float = 0.05
     lines_kept: int = 7  # paper 000: "only the 7 lines with the highest confidence"
-    vp_region_px: float = 40.0  # half-size of the region around the calibrated vanishing point
+    # half-size of the region around the calibrated vanishing point where intersections
+    # count: 1.0 deg of pitch on the bundled drives (fy 773 px), 1.6 deg at fy 500 px (the
+    # papers' preset: 40, core/pitch.py Notes)
+    vp_region_px: float = 14.0
     # intersection weight also x sin(crossing angle) (False: the paper's min confidence alone)
     weight_by_crossing_angle: bool = True
     # an intersection may lie this far inside a segment's rows and still be a vanishing point
