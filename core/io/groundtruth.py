@@ -15,11 +15,11 @@ pixels in continuous image coordinates (pixel centres at integers, so a box cove
 10..19 runs from u0 = 9.5 to u1 = 19.5); position_m is the centre of the object's base
 (nearest face centre for vehicles seen from behind or front) in the vehicle frame at t_ns;
 velocity_mps is over ground in the vehicle frame axes; occlusion is the hidden fraction of
-the object's full image box. guard_rails is null where the truth does not label guard rails
-(the evaluation then scores only the vehicles labelled guard rail), and pitch_rad is null
-where the truth has no pitch (real drives
-imported with their labels): the evaluation then scores no pitch. Frames the file does not
-list have no truth and count neither way (a real drive's frames between its labelled ones).
+the object's full image box. Where the truth has no pitch or labels no guard rails (real
+drives imported with their 3D labels), pitch_rad and guard_rails are null: the evaluation
+then scores no pitch, and of the guard rails only the vehicles labelled guard rail. Frames
+the file does not list have no truth and count neither way (a real drive's frames between
+its labelled ones).
 """
 
 from __future__ import annotations
