@@ -71,6 +71,7 @@ from core.io.importers.finish import (
     Progress,
     check_out_dir,
     output_size,
+    read_grey,
     result,
     staging,
     to_grey,
@@ -287,15 +288,9 @@ def import_aimotive(
     # --- calibration ---------------------------------------------------------------------
     M_cam, M_rad = _matrix(cam, f"{cal_path}: {camera}"), _matrix(rad, f"{cal_path}: {radar}")
     position = M_cam[:3, 3] - (0.0, 0.0, ground)
-    first = cv2.imread(str(frames[0].image), cv2.IMREAD_GRAYSCALE)
-    if first is None:
-        raise RecordingError(f"{frames[0].image}: cannot decode the image (expected a JPEG)")
-    if (first.shape[1], first.shape[0]) != (K_source.width_px, K_source.height_px):
-        raise RecordingError(
-            f"{frames[0].image}: image is {first.shape[1]}x{first.shape[0]}, {cal_path} says "
-            f"{K_source.width_px}x{K_source.height_px} for {camera}"
-        )
-    size = output_size(width_px, (K_source.width_px, K_source.height_px))
+    source_size = (K_source.width_px, K_source.height_px)
+    read_grey(frames[0].image, source_size, f"{camera}'s size in {cal_path}")
+    size = output_size(width_px, source_size)
     model = CameraModel(
         scale_intrinsics(K_source, *size), camera_extrinsics(M_cam[:3, :3], position)
     )
@@ -358,15 +353,8 @@ def import_aimotive(
         ) as w:
             for k, f in enumerate(frames):
                 t_ns = times[f.frame_id] - t0
-                colour = cv2.imread(str(f.image), cv2.IMREAD_GRAYSCALE)
-                if colour is None:
-                    raise RecordingError(f"{f.image}: cannot decode the image (expected a JPEG)")
-                if colour.shape != first.shape:
-                    raise RecordingError(
-                        f"{f.image}: image is {colour.shape[1]}x{colour.shape[0]}, the "
-                        f"sequence's first is {first.shape[1]}x{first.shape[0]}"
-                    )
-                w.add_image(t_ns, to_grey(cv2.undistort(colour, K, dist), size))
+                grey = read_grey(f.image, source_size, f"{camera}'s size in {cal_path}")
+                w.add_image(t_ns, to_grey(cv2.undistort(grey, K, dist), size))
                 targets = tuple(
                     RadarTarget.from_polar(r, a, rr, rcs, mount.x_m, mount.y_m, mount.yaw_rad)
                     for r, a, rr, rcs in scans[k]

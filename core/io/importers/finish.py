@@ -343,6 +343,21 @@ def result(
     )
 
 
+def read_grey(path: Path, size: tuple[int, int] | None = None, whose: str = "") -> GreyImage:
+    """(H, W) uint8 grey of the image file at `path`; RecordingError naming it when it cannot
+    be decoded, or is not `size` (W, H) when that is given (`whose`: whose size it is, for
+    the message)."""
+    image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+    if image is None:
+        raise RecordingError(f"{path}: cannot decode the image (expected a JPEG or PNG)")
+    if size is not None and (image.shape[1], image.shape[0]) != size:
+        raise RecordingError(
+            f"{path}: image is {image.shape[1]}x{image.shape[0]}, expected {size[0]}x{size[1]} "
+            f"({whose})"
+        )
+    return np.asarray(image, dtype=np.uint8)
+
+
 def output_size(width_px: int, source_size: tuple[int, int]) -> tuple[int, int]:
     """(width, height) of the resized image: `width_px` wide, the source's aspect ratio."""
     sw, sh = source_size

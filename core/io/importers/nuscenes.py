@@ -54,7 +54,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 
@@ -71,6 +70,7 @@ from core.io.importers.finish import (
     Progress,
     check_out_dir,
     output_size,
+    read_grey,
     result,
     staging,
     to_grey,
@@ -545,9 +545,7 @@ def import_nuscenes(
             f"{folder / 'calibrated_sensor.json'}: {cal_row['token']}: camera_intrinsic: "
             f"expected a 3x3 matrix for {camera}, got {cal_row.get('camera_intrinsic')}"
         )
-    first = cv2.imread(str(cameras[0].path), cv2.IMREAD_GRAYSCALE)
-    if first is None:
-        raise RecordingError(f"{cameras[0].path}: cannot decode the image (expected a JPEG)")
+    first = read_grey(cameras[0].path)
     source_size = (first.shape[1], first.shape[0])
     size = output_size(width_px, source_size)
     at_source = Intrinsics(
@@ -597,14 +595,7 @@ def import_nuscenes(
                     w.add_vehicle_state((int(t_us) - t0_us) * NS_PER_US, float(v), float(r))
             for k, cam in enumerate(cameras):
                 t_ns = (cam.t_us - t0_us) * NS_PER_US
-                image = cv2.imread(str(cam.path), cv2.IMREAD_GRAYSCALE)
-                if image is None:
-                    raise RecordingError(f"{cam.path}: cannot decode the image (expected a JPEG)")
-                if (image.shape[1], image.shape[0]) != source_size:
-                    raise RecordingError(
-                        f"{cam.path}: image is {image.shape[1]}x{image.shape[0]}, the scene's "
-                        f"first is {source_size[0]}x{source_size[1]}"
-                    )
+                image = read_grey(cam.path, source_size, "the scene's first image's size")
                 w.add_image(t_ns, to_grey(image, size))
                 sweeps = []
                 for radar in radars:
