@@ -41,7 +41,7 @@ class Sets:
 
 
 def changed_names(params: Params) -> list[str]:
-    """Dotted names of the parameters that differ from the papers' values."""
+    """Dotted names of the parameters that differ from the defaults."""
     now, paper = to_dict(params), to_dict(Params())
     return [
         f"{stage}.{name}"
@@ -78,17 +78,17 @@ class ParamSets:
         )
 
     def reset_value(self, dotted: str) -> None:
-        """One parameter of the edited set back to the papers' value."""
-        paper = Params().value_of(dotted)
+        """One parameter of the edited set back to its default."""
+        default = Params().value_of(dotted)
         self._change(
-            f"{self._sets.editing}: {dotted} back to the papers' {paper}",
-            self._sets.with_edited(self._sets.edited.with_value(dotted, paper)),
+            f"{self._sets.editing}: {dotted} back to the default {default}",
+            self._sets.with_edited(self._sets.edited.with_value(dotted, default)),
         )
 
     def reset_all(self) -> None:
-        """Every parameter of the edited set back to the papers' values."""
+        """Every parameter of the edited set back to the defaults."""
         self._change(
-            f"{self._sets.editing}: all back to the papers'", self._sets.with_edited(Params())
+            f"{self._sets.editing}: all back to the defaults", self._sets.with_edited(Params())
         )
 
     # --- presets ------------------------------------------------------------------------

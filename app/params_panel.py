@@ -1,6 +1,7 @@
 """The live parameter panel: a field for every parameter of `core.params.Params`, grouped by
-stage, each with its unit and the paper's value; undo and redo; compare with a set B;
-presets; reset one parameter or all to the papers' values.
+stage, each with its unit, its default and, where the default departs from the papers, the
+papers' value; undo and redo; compare with a set B; presets; reset one parameter or all to
+the defaults.
 
 The panel hands what the user did to `app.param_sets.ParamSets`, which checks and records
 it; the session calls `show` with the outcome. Values set here by the server (`show`) do not
@@ -19,7 +20,7 @@ from typing import Any, Literal
 import viser
 
 from app.param_sets import ParamSets, Sets, changed_names
-from core.params import Params, ParamsError, to_dict
+from core.params import Params, ParamsError, params_from, to_dict
 
 # a parameter's unit, from the end of its name (core/params.py names carry their units)
 UNIT_SUFFIXES = (
@@ -47,9 +48,11 @@ def parameter_names(params: Params) -> list[tuple[str, str, Any]]:
     return [(stage, name, value) for stage in data for name, value in data[stage].items()]
 
 
-def hint(name: str, paper_value: object) -> str:
+def hint(name: str, default: object, papers: object) -> str:
+    """A field's hint: its unit, its default and, where it departs, the papers' value."""
     unit = unit_of(name)
-    return f"{unit + '; ' if unit else ''}paper: {paper_value}"
+    departs = f" (papers: {papers})" if papers != default else ""
+    return f"{unit + '; ' if unit else ''}default: {default}{departs}"
 
 
 NO_CHOICE = "(none)"
@@ -86,14 +89,16 @@ class ParamsPanel:
                 save = gui.add_button("Save the edited set", icon=viser.Icon.DEVICE_FLOPPY)
                 self._preset = gui.add_dropdown("preset", (NO_CHOICE,))
                 load = gui.add_button("Load into the edited set", icon=viser.Icon.FOLDER_OPEN)
-            self._changed = gui.add_dropdown("changed", (NO_CHOICE,), hint="from the papers")
-            reset_one = gui.add_button("Reset it to the paper's value", icon=viser.Icon.RESTORE)
-            reset = gui.add_button("Reset all to the papers' values", icon=viser.Icon.RESTORE)
+            self._changed = gui.add_dropdown("changed", (NO_CHOICE,), hint="from the defaults")
+            reset_one = gui.add_button("Reset it to its default", icon=viser.Icon.RESTORE)
+            reset = gui.add_button("Reset all to the defaults", icon=viser.Icon.RESTORE)
             rows = parameter_names(Params())
+            papers = to_dict(params_from("papers"))
             for stage in (f.name for f in fields(Params)):
                 with gui.add_folder(stage, expand_by_default=False):
                     for _, name, value in (r for r in rows if r[0] == stage):
-                        self._handles[f"{stage}.{name}"] = self._field(gui, name, value)
+                        paper = papers[stage][name]
+                        self._handles[f"{stage}.{name}"] = self._field(gui, name, value, paper)
         history.on_click(lambda e: self._do(sets.undo if e.target.value == "Undo" else sets.redo))
         self._compare.on_update(
             lambda e: self._do(lambda: sets.set_comparing(e.target.value)) if e.client else None
@@ -122,17 +127,17 @@ class ParamsPanel:
         self._list_presets()
 
     @staticmethod
-    def _field(gui: viser.GuiApi, name: str, paper_value: object) -> Any:
-        label, tip = name, hint(name, paper_value)
-        if isinstance(paper_value, bool):
-            return gui.add_checkbox(label, paper_value, hint=tip)
-        if isinstance(paper_value, int):
-            return gui.add_number(label, paper_value, step=1, hint=tip)
-        assert isinstance(paper_value, float), f"{name}: a parameter of unexpected type"
-        return gui.add_number(label, paper_value, step=_step(paper_value), hint=tip)
+    def _field(gui: viser.GuiApi, name: str, default: object, papers: object) -> Any:
+        label, tip = name, hint(name, default, papers)
+        if isinstance(default, bool):
+            return gui.add_checkbox(label, default, hint=tip)
+        if isinstance(default, int):
+            return gui.add_number(label, default, step=1, hint=tip)
+        assert isinstance(default, float), f"{name}: a parameter of unexpected type"
+        return gui.add_number(label, default, step=_step(default), hint=tip)
 
     def show(self, sets: Sets) -> None:
-        """Put the edited set's values, what differs from the papers and the A/B choice in
+        """Put the edited set's values, what differs from the defaults and the A/B choice in
         the controls (after any change, an undo, a refusal)."""
         for stage, name, value in parameter_names(sets.edited):
             handle = self._handles[f"{stage}.{name}"]
@@ -172,7 +177,7 @@ class ParamsPanel:
 
 
 def _step(value: float) -> float:
-    """A field step: the power of ten at most a hundredth of the paper's value (0.001 for 0)."""
+    """A field step: the power of ten at most a hundredth of the default (0.001 for 0)."""
     if value == 0.0:
         return 0.001
     return float(10.0 ** math.floor(math.log10(abs(value) / 100.0)))

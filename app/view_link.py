@@ -4,8 +4,8 @@
      &a.vehicle.symmetry_threshold=0.4&compare=1&b.pitch.lines_kept=9&clip=30-89&present=1
 
 Only what differs from a new tab is written: the parameters are the values that differ from
-the papers' (as JSON numbers, booleans or lists, so a float comes back bit for bit), `compare`
-says that set B exists (it may equal the papers'), `clip` is an inclusive frame range and
+the defaults (as JSON numbers, booleans or lists, so a float comes back bit for bit), `compare`
+says that set B exists (it may equal the defaults), `clip` is an inclusive frame range and
 `present` opens the presenter view. Layers and panels are the names of those switched on
 (`app.state.Layers`, `Panels`), empty for none.
 
@@ -176,9 +176,9 @@ def _flag(text: str) -> bool:
 
 
 def _params(values: dict[str, object], which: str, problems: list[str]) -> Params:
-    """The papers' parameters with `values`; all of them or, when the set is refused, none."""
+    """The default parameters with `values`; all of them or, when the set is refused, none."""
     try:
         return Params().with_values(values)
     except ParamsError as err:
-        problems.append(f"{which}: {err} (set {which.upper()} left at the papers' values)")
+        problems.append(f"{which}: {err} (set {which.upper()} left at the defaults)")
         return Params()

@@ -41,7 +41,7 @@ def test_undo_and_redo_walk_back_and_forth_over_changes(sets: ParamSets) -> None
     sets.set_value(XI, 30.0)
     sets.reset_value(XI)
     assert sets.sets.a == Params()
-    assert sets.undo() == f"A: {XI} back to the papers' 20.0"
+    assert sets.undo() == f"A: {XI} back to the default 20.0"
     assert sets.sets.a.motion_stereo.threshold_xi == 30.0
     sets.undo()
     assert sets.sets.a.motion_stereo.threshold_xi == 25.0

@@ -34,8 +34,9 @@ def test_every_parameter_is_listed_once_in_its_stage() -> None:
 
 
 def test_the_hint_gives_unit_and_the_papers_value() -> None:
-    assert hint("max_distance_m", 40.0) == "m; paper: 40.0"
-    assert hint("scan_bins", 8) == "paper: 8"
+    assert hint("max_distance_m", 40.0, 40.0) == "m; default: 40.0"
+    assert hint("scan_bins", 8, 8) == "default: 8"
+    assert hint("vp_region_px", 14.0, 40.0) == "px; default: 14.0 (papers: 40.0)"
 
 
 @pytest.mark.parametrize(

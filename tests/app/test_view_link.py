@@ -79,7 +79,7 @@ def test_any_view_round_trips(frame: int, on: list[str], stage: str, width: floa
         ("zoom=3", "zoom: not a part of a view (expected one of recording, frame"),
         ("a.pitch.row_step_px=four", "a.pitch.row_step_px: expected a number, true/false"),
         ("a.pitch.no_such=1", "a: "),
-        ("b.pitch.row_step_px=-1", "set B left at the papers' values"),
+        ("b.pitch.row_step_px=-1", "set B left at the defaults"),
     ],
 )
 def test_a_part_that_cannot_be_used_is_named_and_left_alone(query: str, named: str) -> None:
