@@ -7,7 +7,9 @@ A name is a plain file stem (letters, digits, '-', '_'; at most NAME_MAX_CHARS),
 can only ever be `folder/<name>.yaml`: no path separators, no dots, nothing written
 elsewhere. The files are `core.params.save_params` files, readable by `--params` of the
 command line. A save writes a temporary file in the folder, syncs it and renames it over
-the old one, so a failed save leaves the previous preset whole.
+the old one, so a failed save leaves the previous preset whole. The built-in presets
+(`core.params.BUILTIN_PRESETS`: "papers", the papers' pipeline) are listed first and load
+as `--params NAME` does; their names cannot be saved.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import re
 import tempfile
 from pathlib import Path
 
-from core.params import Params, ParamsError, load_params, save_params
+from core.params import BUILTIN_PRESETS, Params, ParamsError, load_params, params_from, save_params
 
 NAME_MAX_CHARS = 64
 NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
@@ -42,13 +44,17 @@ class PresetStore:
         self.folder = Path(folder)
 
     def names(self) -> list[str]:
+        """The built-in presets, then the sorted names of the presets saved so far."""
+        return [*BUILTIN_PRESETS, *self.saved()]
+
+    def saved(self) -> list[str]:
         """Sorted names of the presets saved so far."""
         if not self.folder.is_dir():
             return []
         return sorted(
             p.stem
             for p in self.folder.glob(f"*{SUFFIX}")
-            if p.is_file() and NAME_PATTERN.fullmatch(p.stem)
+            if p.is_file() and NAME_PATTERN.fullmatch(p.stem) and p.stem not in BUILTIN_PRESETS
         )
 
     def path(self, name: str) -> Path:
@@ -57,8 +63,13 @@ class PresetStore:
     def save(self, name: str, params: Params) -> Path:
         """Write `params` as preset `name`, replacing one of that name; its path.
 
-        ParamsError for a bad name or when the folder cannot be written (naming it)."""
+        ParamsError for a bad name, a built-in one, or when the folder cannot be written
+        (naming it)."""
         target = self.path(name)
+        if target.stem in BUILTIN_PRESETS:
+            raise ParamsError(
+                f"preset name: {target.stem!r} is built in (the papers' pipeline); choose another"
+            )
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
             fd, temporary = tempfile.mkstemp(prefix=f".{target.stem}.", dir=self.folder)
@@ -80,6 +91,8 @@ class PresetStore:
         """The parameters of preset `name`; ParamsError naming the file when it is missing
         or not a valid parameter file."""
         target = self.path(name)
+        if target.stem in BUILTIN_PRESETS:
+            return params_from(target.stem)
         if not target.is_file():
-            raise ParamsError(f"{target}: no such preset; saved here: {self.names() or 'none'}")
+            raise ParamsError(f"{target}: no such preset; saved here: {self.saved() or 'none'}")
         return load_params(target)

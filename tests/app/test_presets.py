@@ -6,18 +6,28 @@ from pathlib import Path
 import pytest
 
 from app.presets import PresetStore, check_name
-from core.params import Params, ParamsError, load_params
+from core.params import Params, ParamsError, load_params, params_from
 
 
 def test_a_saved_preset_loads_back_equal_and_is_listed(tmp_path: Path) -> None:
     store = PresetStore(tmp_path / "presets")
-    assert store.names() == []
+    assert store.names() == ["papers"]  # built in, listed first
     params = Params().with_value("motion_stereo.threshold_xi", 31.5)
     path = store.save("tight-xi", params)
     assert path == tmp_path / "presets" / "tight-xi.yaml"
     assert store.load("tight-xi") == params
     assert load_params(path) == params  # the command line's --params reads it too
-    assert store.names() == ["tight-xi"]
+    assert store.names() == ["papers", "tight-xi"]
+
+
+def test_the_papers_preset_is_built_in_loads_as_the_command_line_does_and_cannot_be_saved(
+    tmp_path: Path,
+) -> None:
+    store = PresetStore(tmp_path / "presets")
+    assert store.load("papers") == params_from("papers")
+    with pytest.raises(ParamsError, match="preset name: 'papers' is built in"):
+        store.save("papers", Params())
+    assert not (tmp_path / "presets").exists()
 
 
 def test_saving_again_replaces_the_preset_and_leaves_no_temporary_file(tmp_path: Path) -> None:
