@@ -195,7 +195,7 @@ class VehicleParams:
     same_base_fraction: float = 0.1
     # beyond the papers (core/vehicle.py Notes): boxes are one vehicle only when their
     # targets lie within this distance of each other, a chain of them for a long truck
-    # (the papers' preset: inf, overlap alone)
+    # (the papers' preset: 1000 m, beyond any radar's range: overlap alone decides)
     merge_max_gap_m: float = 5.0
     # beyond the papers: a vehicle is as far as its nearest target, the one nearest its near
     # face (the papers' preset: False, the mean of its targets)
@@ -212,12 +212,7 @@ class VehicleParams:
             "edge_threshold",
             "min_height_ratio",
             "narrow_width_m",
-        )
-        _check(
-            self.merge_max_gap_m >= 0,
             "merge_max_gap_m",
-            "a gap >= 0 m (inf: none)",
-            self.merge_max_gap_m,
         )
         _fraction(
             self,

@@ -78,7 +78,7 @@ Notes:
       101 and 202) and the real drives, RD / (RD + FN): stop_and_go 0.54 -> 0.63 and 0.56 ->
       0.62, exurban 0.72 -> 0.75 and 0.65 -> 0.66, highway 0.91 -> 0.92 and 0.91, nuScenes
       scene-0523 0.34 -> 0.40, with the same FP; the same within one vehicle for gaps of
-      1.5 to 5 m. The papers' preset keeps both off (inf, the mean).
+      1.5 to 5 m. The papers' preset keeps both off (a gap of 1000 m, the mean).
     - Step 10: the paper maps the box base to the world by inverse perspective mapping and
       takes the distance from the radar; here lateral position and width come from the
       rays at the radar's distance, so a bottom found a few rows off (pitch, shadow) moves

@@ -36,7 +36,7 @@ from core.evaluation.vehicles import (
 )
 from core.io.frame import RadarTarget
 from core.io.groundtruth import FrameTruth, TruthObject
-from core.params import MotionStereoParams, Params
+from core.params import MotionStereoParams, Params, params_from
 from tests.conftest import REAL_IMPORTS
 
 TOLERANCE_M = 0.4
@@ -490,3 +490,12 @@ def test_compare_sets_the_headline_figures_of_two_parameter_sets_side_by_side(
     assert [line for line in out.splitlines() if line.startswith("| total")]
     assert main(["evaluate", stop_and_go, "--compare", "papers", "--format", "json"]) == 2
     assert "--compare: prints a table or markdown, not json" in capsys.readouterr().err
+
+
+def test_the_papers_preset_reproduces_the_figures_from_before_the_departures() -> None:
+    # README's stop_and_go vehicle row before the defaults departed from the papers (commit
+    # 0b0e792): RD 56, FN 97, RFN 341, FP 24; pitch 0.26 deg RMS
+    r = evaluate_recording(DEFAULT_RECORDINGS / "stop_and_go", params_from("papers"), timing=False)
+    v = r.vehicles
+    assert (v.rd, v.fn, v.rfn, v.fp) == (56, 97, 341, 24)
+    assert r.pitch.rms_deg == pytest.approx(0.26, abs=0.005)

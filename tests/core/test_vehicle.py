@@ -361,7 +361,7 @@ def test_boxes_of_targets_far_apart_in_distance_are_never_one_vehicle() -> None:
     assert chain == [(big, [0, 2])]
     assert merge_boxes([(near, 1), (big, 0)], PARAMS, distances) == [(big, [0]), (near, [1])]
     # the papers' merge: by overlap alone
-    papers = dataclasses.replace(PARAMS, merge_max_gap_m=math.inf)
+    papers = dataclasses.replace(PARAMS, merge_max_gap_m=1000.0)
     assert merge_boxes([(part, 1), (big, 0)], papers, distances) == [(big, [0, 1])]
 
 
