@@ -21,7 +21,6 @@ from core.io.importers.finish import (
     check_out_dir,
     result,
     staging,
-    write_ego_from_radar,
     write_manifest,
 )
 from core.io.manifest import BagStream, RadarCanSource
@@ -126,8 +125,6 @@ def import_bag(
             assumptions=assumptions,
             assumption_text=assumption_text,
             options=options,
+            notes=notes,
         )
-        if options.ego_from_radar:
-            manifest, note = write_ego_from_radar(manifest, built.calibration, bag_path)
-            notes.append(note)
     return result(out_dir, times_ns, size, built.calibration, manifest, notes)

@@ -200,8 +200,11 @@ def write_manifest(
     assumptions: Assumptions,
     assumption_text: str,
     options: ImportOptions,
+    notes: list[str],
 ) -> Manifest:
-    """Copy the CAN files, write calibration and manifest (checked by staging's open).
+    """Copy the CAN files, write calibration and manifest (checked by staging's open), and
+    with `options.ego_from_radar` the speed from the radar (write_ego_from_radar, whose note
+    is added to `notes`).
 
     The description: "Imported by `fusionscope import KIND` from NAME" + source_text, then
     the calibration's, the CAN mapping's and the assumptions' descriptions.
@@ -229,6 +232,9 @@ def write_manifest(
         max_radar_skew_ms=options.max_radar_skew_ms,
     )
     save_manifest(manifest, tmp / MANIFEST_NAME)
+    if options.ego_from_radar:
+        manifest, note = write_ego_from_radar(manifest, built.calibration, source)
+        notes.append(note)
     return manifest
 
 

@@ -25,7 +25,6 @@ from core.io.importers.finish import (
     result,
     staging,
     to_grey,
-    write_ego_from_radar,
     write_manifest,
 )
 from core.io.manifest import BagStream
@@ -91,8 +90,6 @@ def import_still(
             assumptions=assumptions,
             assumption_text=assumption_text,
             options=options,
+            notes=notes,
         )
-        if options.ego_from_radar:
-            manifest, note = write_ego_from_radar(manifest, built.calibration, image_path)
-            notes.append(note)
     return result(out_dir, [t_ns], out_size, built.calibration, manifest, notes)

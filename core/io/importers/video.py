@@ -38,7 +38,6 @@ from core.io.importers.finish import (
     result,
     staging,
     to_grey,
-    write_ego_from_radar,
     write_manifest,
 )
 from core.io.manifest import BagStream
@@ -227,10 +226,8 @@ def import_video(
                 assumptions=assumptions,
                 assumption_text=assumption_text,
                 options=options,
+                notes=notes,
             )
-            if options.ego_from_radar:
-                manifest, note = write_ego_from_radar(manifest, built.calibration, video)
-                notes.append(note)
     finally:
         v.capture.release()
     return result(out_dir, stamps, out_size, built.calibration, manifest, notes)
