@@ -383,7 +383,7 @@ class FusionEngine:
         motion, motion_ms = _timed(lambda: self._motion_stereo.update(image, camera, ego))
 
         def guard() -> tuple[tuple[SearchArea, ...], GuardRailResult]:
-            areas = search_areas(image, camera, frame.radar, p.vehicle)
+            areas = search_areas(image, camera, frame.radar, p.vehicle, frame.speed_mps)
             return areas, detect_guard_rails(areas, frame.speed_mps, p.guardrail)
 
         (areas, rails), rails_ms = _timed(guard)

@@ -93,7 +93,7 @@ import numpy as np
 import numpy.typing as npt
 
 from core.checks import require_grey_image
-from core.io.frame import RadarTarget
+from core.io.frame import RadarTarget, real_speed_mps
 from core.params import GuardRailParams
 from core.search_area import SearchArea, overlap_fraction
 
@@ -211,15 +211,6 @@ class GuardRailResult:
     def searched(self) -> int:
         """Number of areas the line search ran on."""
         return sum(c.verdict != "overlap" for c in self.checks)
-
-
-def real_speed_mps(target: RadarTarget, ego_speed_mps: float) -> float:
-    """Speed over ground along the line of sight (m/s, positive receding): the range rate
-    plus the ego speed's component along the line of sight, so a static object reads 0.
-
-    NaN when ego_speed_mps is NaN (unknown): such a target is never slow.
-    """
-    return target.range_rate_mps + ego_speed_mps * math.cos(target.azimuth_rad)
 
 
 def is_slow(target: RadarTarget, ego_speed_mps: float, params: GuardRailParams) -> bool:

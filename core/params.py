@@ -80,6 +80,10 @@ class PitchParams:
     max_tracking_offset_px: int = 4
     # share of the way back to the calibrated horizon taken on each tracked frame
     tracking_pull: float = 0.2
+    # beyond the paper: leave out edges inside the previous frame's vehicle boxes (off by
+    # default since moving targets' wider areas boxed more road, core/pitch.py Notes; the
+    # papers' preset: on, as it stood)
+    leave_out_vehicles: bool = False
 
     def __post_init__(self) -> None:
         _positive(
@@ -165,6 +169,12 @@ class VehicleParams:
     """Radar-guided vehicle detection by vertical symmetry (paper 001, II)."""
 
     search_width_m: float = 2.5  # paper 001: "the chosen interest area width is 2.5 meters"
+    # beyond the papers (core/search_area.py Notes): a target moving over ground faster than
+    # moving_speed_mps is a vehicle's, and its area is moving_search_width_m wide, the widest
+    # vehicle (max_width_m) with its radar point up to 0.5 m off its centre, as high as a
+    # search_width_m area (the papers' preset: search_width_m for every target)
+    moving_search_width_m: float = 4.0
+    moving_speed_mps: float = 3.0
     search_height_ratio: float = 0.5  # paper 001: "area height is ... half of its width"
     # paper 001: bottom at 30% of area height below the radar point
     search_bottom_fraction: float = 0.3
@@ -205,6 +215,8 @@ class VehicleParams:
         _positive(
             self,
             "search_width_m",
+            "moving_search_width_m",
+            "moving_speed_mps",
             "search_height_ratio",
             "symmetry_threshold",
             "refined_error_m",

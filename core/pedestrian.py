@@ -92,8 +92,7 @@ import numpy.typing as npt
 from core import symmetry
 from core.camera import CameraModel
 from core.checks import require_2d_array
-from core.guardrail import real_speed_mps
-from core.io.frame import RadarTarget
+from core.io.frame import RadarTarget, real_speed_mps
 from core.params import PedestrianParams
 from core.search_area import intersection_area, rect_area
 

@@ -55,6 +55,15 @@ class RadarTarget:
         )
 
 
+def real_speed_mps(target: RadarTarget, ego_speed_mps: float) -> float:
+    """Speed over ground along the line of sight (m/s, positive receding): the range rate
+    plus the ego speed's component along the line of sight, so a static object reads 0.
+
+    NaN when ego_speed_mps is NaN (unknown): such a target is never slow.
+    """
+    return target.range_rate_mps + ego_speed_mps * math.cos(target.azimuth_rad)
+
+
 @dataclass(frozen=True, eq=False)
 class FrameInput:
     """One camera frame with everything measured near its time.

@@ -144,7 +144,7 @@ def test_a_real_frame_has_its_results_detections_and_nothing_differs_from_itself
 ) -> None:
     found = detections(real)
     kinds = [d.kind for d in found]
-    assert kinds.count("vehicle") == len(real.vehicle.vehicles) == 1
+    assert kinds.count("vehicle") == len(real.vehicle.vehicles) >= 1
     assert kinds.count("pedestrian") == len(real.pedestrian.kept)
     rails = {d.target_index for d in found if d.kind == "guard rail"}
     assert rails == real.guardrail.guard_rail_targets and rails

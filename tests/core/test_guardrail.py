@@ -22,11 +22,10 @@ from core.guardrail import (
     find_start,
     follow_line,
     rail_edges,
-    real_speed_mps,
     search_line,
 )
 from core.io.drive import Drive
-from core.io.frame import RadarTarget
+from core.io.frame import RadarTarget, real_speed_mps
 from core.io.groundtruth import FrameTruth
 from core.params import GuardRailParams, Params, ParamsError
 from core.search_area import SearchArea, search_areas

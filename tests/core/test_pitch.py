@@ -398,8 +398,13 @@ def test_edges_inside_vehicle_boxes_are_left_out() -> None:
     assert np.count_nonzero(at_car_angle) == 2  # its two edges
     assert len(seen.fitted) == len(detect_pitch(clean, DRAWN_CAMERA, DEFAULTS).fitted) + 2
 
-    hidden = detect_pitch(with_car, DRAWN_CAMERA, DEFAULTS, vehicle_boxes_px=[CAR_BOX])
-    reference = detect_pitch(clean, DRAWN_CAMERA, DEFAULTS)
+    # off by default: the box changes nothing
+    kept = detect_pitch(with_car, DRAWN_CAMERA, DEFAULTS, vehicle_boxes_px=[CAR_BOX])
+    np.testing.assert_allclose(kept.fitted.abc, seen.fitted.abc)
+
+    on = dataclasses.replace(DEFAULTS, leave_out_vehicles=True)  # the papers' preset
+    hidden = detect_pitch(with_car, DRAWN_CAMERA, on, vehicle_boxes_px=[CAR_BOX])
+    reference = detect_pitch(clean, DRAWN_CAMERA, on)
     assert not np.any(np.abs(hidden.fitted.angle_rad - car_angle) < 0.01)
     # exactly as if the car were not there
     np.testing.assert_array_equal(hidden.edges_positive, reference.edges_positive)

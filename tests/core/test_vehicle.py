@@ -73,6 +73,35 @@ def test_search_area_is_where_the_formulas_put_it() -> None:
     assert (area.y_left_m, area.y_right_m) == pytest.approx((2.25, -0.25))
 
 
+def test_a_target_moving_over_ground_gets_the_wider_area() -> None:
+    cam = flat_camera()
+    image = np.zeros((480, 640), dtype=np.uint8)
+    ego_mps = 20.0
+    bearing = math.atan2(1.0, 25.0 - RADAR_X_M)
+    still = target(25.0, 1.0, -ego_mps * math.cos(bearing))  # static: closes at the ego speed
+    slow = target(25.0, 1.0, (PARAMS.moving_speed_mps - 0.5 - ego_mps) * math.cos(bearing))
+    car = target(25.0, 1.0, (15.0 - ego_mps) * math.cos(bearing))  # 15 m/s over ground
+    widths = {
+        name: (a.y_left_m - a.y_right_m, a.px_per_m)
+        for name, (a,) in (
+            ("still", search_areas(image, cam, (still,), PARAMS, ego_mps)),
+            ("slow", search_areas(image, cam, (slow,), PARAMS, ego_mps)),
+            ("car", search_areas(image, cam, (car,), PARAMS, ego_mps)),
+            ("unknown", search_areas(image, cam, (car,), PARAMS)),  # ego speed NaN
+        )
+    }
+    assert widths["still"] == pytest.approx((2.5, 64 / 2.5))
+    assert widths["slow"] == pytest.approx((2.5, 64 / 2.5))
+    assert widths["unknown"] == pytest.approx((2.5, 64 / 2.5))
+    # 4 m at 25 m is 128 px, resampled to 64
+    assert widths["car"] == pytest.approx((PARAMS.moving_search_width_m, 64 / 4.0))
+    (area,) = search_areas(image, cam, (car,), PARAMS, ego_mps)
+    assert area.full_px[2] - area.full_px[0] == pytest.approx(800.0 * 4.0 / 25.0)
+    # as high as the paper's area: the extra width is for the radar's lateral error
+    assert area.full_px[3] - area.full_px[1] == pytest.approx(0.5 * 800.0 * 2.5 / 25.0)
+    assert area.patch.shape == (round(40 * 0.5), 64)
+
+
 def test_far_areas_are_not_enlarged_and_border_areas_are_cropped() -> None:
     cam = flat_camera()
     image = np.zeros((480, 640), dtype=np.uint8)
@@ -257,6 +286,26 @@ def test_rendered_car_is_found_with_its_position_and_width(
     overlay = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
     cv2.rectangle(overlay, (round(u0), round(v0)), (round(u1), round(v1)), (0, 255, 0), 1)
     cv2.imwrite(str(tmp_path / "rendered_car.png"), overlay)
+
+
+def test_a_moving_target_off_the_cars_centre_still_finds_the_whole_car(
+    rendered_car: tuple[np.ndarray, np.ndarray],
+) -> None:
+    """The radar point on the car's left edge, 0.9 m off its centre: the paper's 2.5 m area
+    cuts the car; a moving target's area holds it and the car is measured whole."""
+    image, _ = rendered_car
+    cam = camera()
+    ego_mps, car_mps = 20.0, 15.0
+    bearing = math.atan2(1.9, 20.0 - RADAR_X_M)
+    radar = (target(20.0, 1.9, (car_mps - ego_mps) * math.cos(bearing)),)
+    papers = dataclasses.replace(PARAMS, moving_search_width_m=PARAMS.search_width_m)
+    for params, found in ((papers, False), (PARAMS, True)):
+        areas = search_areas(image, cam, radar, params, ego_mps)
+        result = detect_vehicles(areas, radar, cam, params)
+        whole = [v for v in result.vehicles if abs(v.width_m - 1.8) < 0.15]
+        assert bool(whole) == found
+    (v,) = whole
+    assert v.lateral_m == pytest.approx(1.0, abs=0.1)
 
 
 def test_radar_point_beside_the_car_finds_nothing(
