@@ -96,6 +96,7 @@ PEDESTRIAN_REASONS: Mapping[str, str] = {
     "motion_stereo": "motion",
     "vehicle": "vehicle",
     "radar": "radar",
+    "hog": "HOG",
 }
 
 

@@ -18,11 +18,8 @@ times itself, prints or sets OpenCV's thread count (the caller's `cv2.setNumThre
 holds).
 
 Notes:
-    - OpenCV 5 moved `HOGDescriptor` out of the main package (objdetect) into the contrib
-      module xobjdetect: `opencv-python-headless` 5.x has no HOG, while
-      `opencv-contrib-python-headless` 5.x and every 4.x wheel have it. `hog_available()`
-      says whether this OpenCV has it; `HogPeople` raises `BaselineUnavailableError` with that
-      advice when it does not.
+    - HOG needs OpenCV's contrib build with OpenCV 5 (`core.hog` Notes); `HogPeople` raises
+      `core.hog.HogUnavailableError` saying what to install when this OpenCV has none.
     - HOG boxes: the default people detector's 64x128 window frames a 96 px tall person
       with margins of about 1/8 of the window around it. Boxes are shrunk to the person as
       OpenCV's people-detection sample does (peopledetect.cpp: 10 % off the left, 80 % of
@@ -58,32 +55,20 @@ import numpy.typing as npt
 
 from core.camera import CameraModel
 from core.checks import require_grey_image
+from core.hog import (
+    HOG_BLOCK_STRIDE_PX,
+    HOG_PERSON_HEIGHT,
+    HOG_PERSON_LEFT,
+    HOG_PERSON_TOP,
+    HOG_PERSON_WIDTH,
+    HOG_WINDOW_PX,
+    require_hog,
+)
 from core.pitch import Lines, calibrated_vanishing_point_px, intersections
 
 Box = tuple[float, float, float, float]
 U8Array = npt.NDArray[np.uint8]
 FloatArray = npt.NDArray[np.float64]
-
-# OpenCV's default people detector: a 64x128 px window, 8 px block stride (a window stride
-# must be a multiple of it).
-HOG_WINDOW_PX = (64, 128)
-HOG_BLOCK_STRIDE_PX = 8
-# OpenCV samples/cpp/peopledetect.cpp: "the HOG detector returns slightly larger rectangles
-# than the real objects, so we slightly shrink the rectangles": x + 10 % of the width, 80 %
-# of the width; y + 7 % of the height, 80 % of the height.
-HOG_PERSON_LEFT = 0.10
-HOG_PERSON_TOP = 0.07
-HOG_PERSON_WIDTH = 0.80
-HOG_PERSON_HEIGHT = 0.80
-
-
-class BaselineUnavailableError(RuntimeError):
-    """The installed OpenCV lacks what a baseline needs; the message says what to install."""
-
-
-def hog_available() -> bool:
-    """Whether this OpenCV has the HOG people detector (OpenCV 5's main package has not)."""
-    return hasattr(cv2, "HOGDescriptor") and hasattr(cv2, "HOGDescriptor_getDefaultPeopleDetector")
 
 
 def _require_rows(rows_px: tuple[int, int], height_px: int) -> tuple[int, int]:
@@ -182,12 +167,7 @@ class HogPeople:
     """
 
     def __init__(self, params: HogParams | None = None) -> None:
-        if not hog_available():
-            raise BaselineUnavailableError(
-                f"HogPeople: OpenCV {cv2.__version__} has no cv2.HOGDescriptor (OpenCV 5 moved "
-                "it to the contrib module xobjdetect); install opencv-contrib-python-headless "
-                "instead of opencv-python-headless, or opencv-python-headless<5"
-            )
+        require_hog("HogPeople")
         self.params = HogParams() if params is None else params
         # Any: OpenCV 5's own type stubs have no HOG (the module Notes)
         opencv: Any = cv2

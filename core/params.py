@@ -347,6 +347,12 @@ class PedestrianParams:
     radar_min_speed_mps: float = 3.0
     radar_gate_lateral_m: float = 1.5
     radar_gate_distance_fraction: float = 0.2
+    # beyond the papers (core/pedestrian.py, step 6): a box that passed every filter is kept
+    # only when OpenCV's HOG people SVM scores its window at least hog_min_score (the SVM's
+    # own threshold is 0; core/hog.py); verify_with_hog False keeps every box (the papers'
+    # preset)
+    verify_with_hog: bool = True
+    hog_min_score: float = -1.0
 
     def __post_init__(self) -> None:
         _positive(
@@ -401,6 +407,12 @@ class PedestrianParams:
             "radar_gate_lateral_m",
             "a distance >= 0 (0: no radar filter)",
             self.radar_gate_lateral_m,
+        )
+        _check(
+            math.isfinite(self.hog_min_score),
+            "hog_min_score",
+            "a finite number",
+            self.hog_min_score,
         )
 
 

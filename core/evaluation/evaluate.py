@@ -34,13 +34,16 @@ from .vehicles import Estimate, EventStats, FrameStats, FrameVehicles
 
 # the pedestrian outputs compared: the detector alone (its candidates that passed the size
 # and perspective constraints), after the motion-stereo filter, after the vehicle filter
-# (paper 000's output), after the radar filter (beyond the paper: the engine's output)
+# (paper 000's output), after the radar filter and after the HOG verification (both beyond
+# the paper; the last is the engine's output, FINAL_PEDESTRIAN_STAGE)
 PEDESTRIAN_STAGES: dict[str, tuple[Verdict, ...]] = {
     "symmetry": FUSION_VERDICTS,
-    "motion_stereo": ("pedestrian", "vehicle", "radar"),
-    "vehicles": ("pedestrian", "radar"),
-    "radar": ("pedestrian",),
+    "motion_stereo": ("pedestrian", "vehicle", "radar", "hog"),
+    "vehicles": ("pedestrian", "radar", "hog"),
+    "radar": ("pedestrian", "hog"),
+    "hog": ("pedestrian",),
 }
+FINAL_PEDESTRIAN_STAGE = "hog"
 
 Progress = Callable[[int, int], None]
 T = TypeVar("T")
@@ -94,7 +97,7 @@ def error_listings(r: RecordingReport) -> tuple[ErrorListing, ...]:
     labelled guard rail are among the FP), pedestrians missed and false boxes after the
     fusion filters (the engine's output). NVO are right answers and the tracked output
     repeats the detections' frames, so neither is listed."""
-    final = r.pedestrians["radar"]
+    final = r.pedestrians[FINAL_PEDESTRIAN_STAGE]
     return (
         ErrorListing("vehicle FN", "vehicle FN (truth id: frames)", r.vehicles.fn_at),
         ErrorListing("vehicle RFN", "vehicle RFN (truth id: frames)", r.vehicles.rfn_at),

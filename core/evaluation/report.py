@@ -25,7 +25,13 @@ from typing import Any
 from core.bench import PAPER_002_MS
 
 from .baselines import Timing
-from .evaluate import PEDESTRIAN_STAGES, RecordingReport, error_listings, total
+from .evaluate import (
+    FINAL_PEDESTRIAN_STAGE,
+    PEDESTRIAN_STAGES,
+    RecordingReport,
+    error_listings,
+    total,
+)
 from .mot import MotScore
 from .objects import BoxScore, MaskScore, PitchScore, RailScore
 from .vehicles import EventStats, FrameStats
@@ -39,6 +45,7 @@ PEDESTRIAN_TITLES = {
     "motion_stereo": "+ motion stereo",
     "vehicles": "+ vehicles",
     "radar": "+ radar (beyond)",
+    "hog": "+ HOG (beyond)",
 }
 
 
@@ -596,7 +603,7 @@ HEADLINE_FIGURES: tuple[tuple[str, Callable[[RecordingReport], str]], ...] = (
     ("events refined", _events_refined),
     ("vehicles labelled guard rail", lambda r: str(r.guardrails.vehicles_labelled)),
     ("guard-rail FN / FP", _rail_errors),
-    ("pedestrians recall / precision", lambda r: _rp(r.pedestrians["radar"])),
+    ("pedestrians recall / precision", lambda r: _rp(r.pedestrians[FINAL_PEDESTRIAN_STAGE])),
     ("pitch RMS deg", lambda r: _deg(r.pitch.rms_deg)),
     ("tracked vehicles MOTA", _vehicle_mota),
 )

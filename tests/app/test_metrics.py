@@ -14,6 +14,7 @@ from app_fakes import Recordings
 from app.metrics import ERROR_KINDS, ErrorMark, error_marks, metrics_markdown, slider_marks
 from core.evaluation.codec import empty
 from core.evaluation.evaluate import (
+    FINAL_PEDESTRIAN_STAGE,
     PEDESTRIAN_STAGES,
     RecordingReport,
     error_listings,
@@ -61,7 +62,8 @@ def errors() -> RecordingReport:
             **r.pedestrians,
             "symmetry": BoxScore(missed_at=((70, 1),)),  # before the fusion filters
             "vehicles": BoxScore(missed_at=((70, 1),)),  # before the radar filter
-            "radar": BoxScore(missed_at=((40, 7),), false_at=((37, 0), (61, 0), (37, 1))),
+            "radar": BoxScore(missed_at=((70, 1),)),  # before the HOG verification
+            "hog": BoxScore(missed_at=((40, 7),), false_at=((37, 0), (61, 0), (37, 1))),
         },
         tracking=dataclasses.replace(
             r.tracking, vehicles=dataclasses.replace(empty(FrameStats), fn_at=((80, 3),))
@@ -176,7 +178,7 @@ def test_a_negative_label_limit_is_refused() -> None:
 
 def listed(r: RecordingReport) -> dict[str, set[int]]:
     """The frames of each kind of error, read from the report's fields."""
-    after_filters = r.pedestrians["radar"]
+    after_filters = r.pedestrians[FINAL_PEDESTRIAN_STAGE]
     at = {
         "vehicle FN": r.vehicles.fn_at,
         "vehicle RFN": r.vehicles.rfn_at,

@@ -21,16 +21,14 @@ import numpy.typing as npt
 import pytest
 
 from core.baselines import (
-    HOG_PERSON_HEIGHT,
-    BaselineUnavailableError,
     HogParams,
     HogPeople,
     HoughPitchParams,
     Mog2Obstacles,
     Mog2Params,
-    hog_available,
     hough_pitch,
 )
+from core.hog import HOG_PERSON_HEIGHT, HogUnavailableError, hog_available
 from core.synth.scene import Pedestrian, Trajectory
 from core.synth.sensors import camera_noise
 from tests.core.roadscenes import RoadRenderer, camera, straight_road
@@ -185,7 +183,7 @@ def test_without_hog_opencv_the_error_says_what_to_install(
 ) -> None:
     monkeypatch.delattr(cv2, "HOGDescriptor", raising=False)
     assert not hog_available()
-    with pytest.raises(BaselineUnavailableError, match="opencv-contrib-python-headless"):
+    with pytest.raises(HogUnavailableError, match="opencv-contrib-python-headless"):
         HogPeople()
 
 

@@ -329,7 +329,13 @@ def test_json_has_every_figure_with_its_type(stop_and_go_json: dict) -> None:  #
         assert set(figures) >= {
             "vehicles", "guardrails", "pedestrians", "motion_stereo", "pitch", "tracking"
         }  # fmt: skip
-        assert set(figures["pedestrians"]) == {"symmetry", "motion_stereo", "vehicles", "radar"}
+        assert set(figures["pedestrians"]) == {
+            "symmetry",
+            "motion_stereo",
+            "vehicles",
+            "radar",
+            "hog",
+        }
         for p in figures["pedestrians"].values():
             assert 0.0 <= p["recall"] <= 1.0 and 0.0 <= p["precision"] <= 1.0
         assert isinstance(figures["pitch"]["rms_deg"], float)

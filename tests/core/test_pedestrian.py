@@ -180,6 +180,25 @@ def test_a_person_where_radar_sees_a_fast_target_is_rejected_with_that_reason() 
     assert verdicts((near,), vehicles=((u0 - 20, v0 - 10, u1 + 20, v1 + 5),)) == ["vehicle"]
 
 
+def test_the_hog_verification_keeps_a_person_and_says_why_it_drops_a_box() -> None:
+    image, labels = _scene("person")
+    (found,) = _detect(image).kept
+    # the flat-shaded person scores well above the SVM's own threshold (0)
+    assert found.hog_score > 0.0
+    # a box the SVM scores below hog_min_score is dropped with that reason, score kept
+    strict = replace(PARAMS, hog_min_score=found.hog_score + 0.01)
+    (dropped,) = [c for c in _detect(image, params=strict).candidates if c.verdict == "hog"]
+    assert dropped.hog_score == pytest.approx(found.hog_score)
+    assert _on(_detect(image, params=strict), _truth_box(labels)) == ["hog"]
+    # the papers' preset does not verify: no score, the box kept
+    papers = replace(PARAMS, verify_with_hog=False, hog_min_score=found.hog_score + 0.01)
+    (kept,) = _detect(image, params=papers).kept
+    assert math.isnan(kept.hog_score)
+    # only boxes that passed every filter are scored
+    rejected = _detect(image, mask_value=0).candidates
+    assert rejected and all(math.isnan(c.hog_score) for c in rejected)
+
+
 def test_an_empty_road_has_no_pedestrian() -> None:
     image, _ = _scene("empty")
     assert not _detect(image).kept

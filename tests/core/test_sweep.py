@@ -418,7 +418,8 @@ def test_the_worst_frames_count_the_errors_evaluate_lists() -> None:
             **r.pedestrians,
             "symmetry": BoxScore(missed_at=((8, 4),) * 5),  # before the filters: not counted
             "vehicles": BoxScore(missed_at=((8, 4),) * 5),  # paper 000's output: not counted
-            "radar": BoxScore(missed_at=((5, 9),), false_at=((1, 0),)),  # the engine's
+            "radar": BoxScore(missed_at=((8, 4),) * 5),  # before the HOG verification
+            "hog": BoxScore(missed_at=((5, 9),), false_at=((1, 0),)),  # the engine's
         },
     )
     other = dataclasses.replace(

@@ -1,0 +1,74 @@
+"""OpenCV's HOG people SVM scoring given boxes (core/hog.py): known answers."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from core.hog import HOG_WINDOW_PX, TRAINING_PERSON_PX, people_scores, window_for
+from core.synth.scene import Pedestrian, Trajectory
+from tests.core.roadscenes import RoadRenderer, camera, straight_road
+
+PERSON_ID = 7
+
+
+def _person_image() -> tuple[np.ndarray, tuple[float, float, float, float]]:
+    """A standing person 12 m ahead on a plain road, and their box from the labels."""
+    standing = Trajectory.from_waypoints([(0.0, 12.0, 1.5), (10.0, 12.0, 1.5)])
+    scene = straight_road(
+        speed_mps=0.0, markings=False, pedestrians=(Pedestrian(PERSON_ID, 1.75, 150, 40, standing),)
+    )
+    image, labels = RoadRenderer(scene)(0.0, camera().extrinsics.pitch_rad, noise=False)
+    rows, cols = np.nonzero(labels == PERSON_ID)
+    return image, (
+        float(cols.min()),
+        float(rows.min()),
+        float(cols.max() + 1),
+        float(rows.max() + 1),
+    )
+
+
+def test_the_window_frames_the_box_as_the_training_windows_frame_a_person() -> None:
+    u0, v0, u1, v1 = window_for((100.0, 50.0, 120.0, 146.0))  # 96 px tall, axis at 110
+    assert (v1 - v0) == pytest.approx(96.0 * HOG_WINDOW_PX[1] / TRAINING_PERSON_PX)  # 128
+    assert (u1 - u0) == pytest.approx((v1 - v0) / 2)
+    assert (u0 + u1) / 2 == pytest.approx(110.0)
+    assert (v0 + v1) / 2 == pytest.approx(98.0)  # centred: 16 px above and below
+
+
+def test_a_person_scores_above_the_svms_threshold_and_what_is_beside_them_below() -> None:
+    image, box = _person_image()
+    person, road, shifted = people_scores(
+        image,
+        [box, (box[0], box[3] + 5, box[2], box[3] + 5 + (box[3] - box[1])), _beside(box)],
+    )
+    assert person > 0.0  # OpenCV's hitThreshold
+    assert road < 0.0 and shifted < person
+
+
+def _beside(box: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    width = box[2] - box[0]
+    return (box[0] + 3 * width, box[1], box[2] + 3 * width, box[3])
+
+
+def test_scores_equal_those_of_opencvs_own_window_descriptor() -> None:
+    """The resampled window is what the SVM sees: the same image cut and resized by hand,
+    scored by OpenCV's compute and the detector's weights, gives the same value."""
+    image, _ = _person_image()
+    box = (200.0, 100.0, 232.0, 196.0)  # 96 px tall: the window is 64x128 px, no resampling
+    u0, v0, _, _ = window_for(box)
+    window = np.ascontiguousarray(image[int(v0) : int(v0) + 128, int(u0) : int(u0) + 64])
+    svm = np.asarray(cv2.HOGDescriptor_getDefaultPeopleDetector(), np.float32).ravel()  # type: ignore[attr-defined]
+    expected = float(cv2.HOGDescriptor().compute(window).ravel() @ svm[:-1]) + float(svm[-1])  # type: ignore[attr-defined]
+    (score,) = people_scores(image, [box])
+    assert score == pytest.approx(expected, abs=1e-3)
+
+
+def test_no_boxes_no_scores_and_bad_inputs_name_the_argument() -> None:
+    image, _ = _person_image()
+    assert people_scores(image, []) == ()
+    with pytest.raises(ValueError, match=r"boxes_px: expected boxes with v1 > v0"):
+        people_scores(image, [(10.0, 20.0, 30.0, 20.0)])
+    with pytest.raises(ValueError, match="image"):
+        people_scores(image.astype(np.float32), [(10.0, 20.0, 30.0, 60.0)])
