@@ -388,7 +388,9 @@ class FusionEngine:
 
         (areas, rails), rails_ms = _timed(guard)
         vehicle, vehicle_ms = _timed(
-            lambda: detect_vehicles(areas, frame.radar, camera, p.vehicle, rails.guard_rail_targets)
+            lambda: detect_vehicles(
+                areas, frame.radar, camera, p.vehicle, rails.guard_rail_targets, image
+            )
         )
         boxes = tuple(v.box_px for v in vehicle.vehicles)
         pedestrian, pedestrian_ms = _timed(

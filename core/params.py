@@ -197,6 +197,12 @@ class VehicleParams:
     max_width_m: float = 3.0  # world-size filter: widest vehicle
     # box height / width when the top is not found (paper 001, fig. 7.b)
     default_height_ratio: float = 0.8
+    # beyond the papers (core/vehicle.py, step 11): a box's top rises to where both of its
+    # side borders' vertical edges end, looked for up to top_search_ratio x its width above
+    # its base, a border ending at a gap of more than top_gap_ratio x its width (the papers'
+    # preset: top_search_ratio 0, off)
+    top_search_ratio: float = 2.0
+    top_gap_ratio: float = 0.2
     # boxes from several targets overlapping by more than this share of the smaller one are
     # one vehicle (paper 001: "overlapping results")
     merge_overlap_fraction: float = 0.5
@@ -221,6 +227,7 @@ class VehicleParams:
             "symmetry_threshold",
             "refined_error_m",
             "default_height_ratio",
+            "top_gap_ratio",
             "edge_threshold",
             "min_height_ratio",
             "narrow_width_m",
@@ -234,6 +241,12 @@ class VehicleParams:
             "merge_overlap_fraction",
             "similar_size_ratio",
             "same_base_fraction",
+        )
+        _check(
+            math.isfinite(self.top_search_ratio) and self.top_search_ratio >= 0,
+            "top_search_ratio",
+            "a ratio >= 0 (0: the top is not searched above the area)",
+            self.top_search_ratio,
         )
         _check(
             self.resampled_width_px >= 8,

@@ -123,6 +123,13 @@ def intersection_area(a: Rect, b: Rect) -> float:
     return rect_area((max(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), min(a[3], b[3])))
 
 
+def iou(a: Rect, b: Rect) -> float:
+    """Intersection over union of two image rectangles (0 when both are empty)."""
+    shared = intersection_area(a, b)
+    union = rect_area(a) + rect_area(b) - shared
+    return shared / union if union > 0 else 0.0
+
+
 def overlap_fraction(a: SearchArea, b: SearchArea) -> float:
     """Share of area `b`'s cropped image rectangle that `a`'s covers (0 .. 1)."""
     return intersection_area(a.box_px, b.box_px) / max(1.0, rect_area(b.box_px))

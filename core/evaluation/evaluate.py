@@ -120,7 +120,7 @@ def error_listings(r: RecordingReport) -> tuple[ErrorListing, ...]:
 
 def _vehicle_estimates(result: FrameResult) -> list[Estimate]:
     return [
-        Estimate(v.distance_m, v.lateral_m, v.width_m, v.target_indices)
+        Estimate(v.distance_m, v.lateral_m, v.width_m, v.target_indices, v.box_px)
         for v in result.vehicle.vehicles
     ]
 
@@ -133,6 +133,7 @@ def _track_estimates(result: FrameResult) -> list[Estimate]:
             t.y_m,
             t.width_m,
             () if t.source_index is None else found[t.source_index].target_indices,
+            t.box_px,
         )
         for t in result.tracked_vehicles
     ]

@@ -36,7 +36,7 @@ from core.camera import CameraModel
 from core.io.frame import RadarTarget
 from core.io.groundtruth import FrameTruth, TruthObject
 from core.params import MotionStereoParams
-from core.search_area import intersection_area, rect_area
+from core.search_area import iou
 
 from .counts import add_fields
 from .vehicles import VEHICLE_CLASSES, lies_on
@@ -50,12 +50,6 @@ RAIL_HEIGHT_M = 0.61  # the truth polylines run along the beam's centre, this hi
 MIN_BOX_HEIGHT_PX = 8.0  # smaller obstacles are too far for motion stereo's grid
 BOX_MARGIN_PX = 4  # a marked pixel this close to an object's box is explained by it
 MOVING_MPS = 0.5  # an object faster than this over the ground moves
-
-
-def iou(a: Box, b: Box) -> float:
-    shared = intersection_area(a, b)
-    union = rect_area(a) + rect_area(b) - shared
-    return shared / union if union > 0 else 0.0
 
 
 @dataclass(frozen=True)

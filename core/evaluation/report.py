@@ -49,6 +49,18 @@ PEDESTRIAN_TITLES = {
 }
 
 
+# a refined vehicle's box should overlap its true box by this much of their union (issue 32)
+IOU_GOOD = 0.6
+
+
+def _fixed(x: float) -> str:
+    return "-" if math.isnan(x) else f"{x:.2f}"
+
+
+def _percent(x: float) -> str:
+    return "-" if math.isnan(x) else f"{x:.0%}"
+
+
 def _share(x: float) -> float | None:
     return None if math.isnan(x) else round(x, 4)
 
@@ -72,6 +84,8 @@ def _frames_json(s: FrameStats, listings: bool) -> dict[str, Any]:
         "rd_share": _ratio(s.rd, s.framed),
         "fn_share": _ratio(s.fn, s.framed),
         "rfn_share": _ratio(s.rfn, s.framed),
+        "rd_iou_median": _share(s.rd_iou_median),
+        "rd_iou_good_share": _share(s.rd_iou_share(IOU_GOOD)),
     }
     if listings:
         out |= {
@@ -317,7 +331,18 @@ def tables(
     out = [
         Table(
             "Vehicles, frame by frame (paper 001, section III)",
-            ("recording", "frames", "framed", "RD", "FN", "RFN", "FP", "NVO"),
+            (
+                "recording",
+                "frames",
+                "framed",
+                "RD",
+                "FN",
+                "RFN",
+                "FP",
+                "NVO",
+                "RD box IoU median",
+                f"RD box IoU >= {IOU_GOOD:g}",
+            ),
             tuple(
                 (
                     r.name,
@@ -328,6 +353,8 @@ def tables(
                     _pct(r.vehicles.rfn, r.vehicles.framed),
                     str(r.vehicles.fp),
                     str(r.vehicles.nvo),
+                    _fixed(r.vehicles.rd_iou_median),
+                    _percent(r.vehicles.rd_iou_share(IOU_GOOD)),
                 )
                 for r in rows
             ),
@@ -600,6 +627,7 @@ HEADLINE_FIGURES: tuple[tuple[str, Callable[[RecordingReport], str]], ...] = (
     ("vehicles RD / (RD + FN)", _refined_of_supplied),
     ("vehicles RFN / framed", _rfn_of_framed),
     ("vehicle FP per frame", _fp_per_frame),
+    ("vehicles RD box IoU median", lambda r: _fixed(r.vehicles.rd_iou_median)),
     ("events refined", _events_refined),
     ("vehicles labelled guard rail", lambda r: str(r.guardrails.vehicles_labelled)),
     ("guard-rail FN / FP", _rail_errors),

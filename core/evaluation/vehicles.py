@@ -40,6 +40,7 @@ Where the paper is ambiguous, and what was chosen:
 
 from __future__ import annotations
 
+import math
 from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -47,6 +48,7 @@ from typing import Literal, Protocol
 
 from core.io.frame import RadarTarget
 from core.io.groundtruth import TruthObject
+from core.search_area import iou
 
 from .counts import add_fields
 
@@ -77,22 +79,27 @@ class Area(Protocol):
 class Estimate:
     """A vehicle the system reports: a detection, or a confirmed track for tracked output.
     distance_m: radar distance of its near face; lateral_m: centre, positive left;
-    target_indices: the radar targets it came from."""
+    target_indices: the radar targets it came from; box_px: its image box (u0, v0, u1, v1),
+    None when it has none."""
 
     distance_m: float
     lateral_m: float
     width_m: float
     target_indices: tuple[int, ...]
+    box_px: tuple[float, float, float, float] | None = None
 
 
 @dataclass(frozen=True)
 class FrameVehicles:
     """One frame's verdicts: (truth id, verdict) per framed vehicle and (radar target index,
-    verdict) per supplied target on no vehicle."""
+    verdict) per supplied target on no vehicle; rd_iou: for each RD vehicle in order, the
+    IoU of its true image box with the best box of the estimates that refine it (NaN when
+    none has a box)."""
 
     index: int
     vehicles: tuple[tuple[int, VehicleVerdict], ...]
     obstacles: tuple[tuple[int, ObstacleVerdict], ...]
+    rd_iou: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -109,10 +116,27 @@ class FrameStats:
     rfn_at: tuple[tuple[int, int], ...]
     fp_at: tuple[tuple[int, int], ...]
     nvo_at: tuple[tuple[int, int], ...]
+    # the box IoU of every RD (`FrameVehicles.rd_iou`): how well the box frames the vehicle,
+    # which the 0.40 m criterion (distance, lateral centre, width) does not judge
+    rd_iou: tuple[float, ...] = ()
 
     @property
     def framed(self) -> int:
         return self.rd + self.fn + self.rfn
+
+    @property
+    def rd_iou_median(self) -> float:
+        """Median box IoU of the RD with a box (NaN without one)."""
+        known = sorted(v for v in self.rd_iou if not math.isnan(v))
+        if not known:
+            return math.nan
+        mid = len(known) // 2
+        return known[mid] if len(known) % 2 else (known[mid - 1] + known[mid]) / 2
+
+    def rd_iou_share(self, at_least: float) -> float:
+        """Share of the RD with a box whose IoU reaches `at_least` (NaN without one)."""
+        known = [v for v in self.rd_iou if not math.isnan(v)]
+        return sum(v >= at_least for v in known) / len(known) if known else math.nan
 
     def __add__(self, other: FrameStats) -> FrameStats:
         return add_fields(self, other)
@@ -168,13 +192,20 @@ def _contained(o: TruthObject, areas: Sequence[Area]) -> bool:
     )
 
 
-def _refined(o: TruthObject, estimates: Sequence[Estimate], tolerance_m: float) -> bool:
+def _refining(o: TruthObject, estimates: Sequence[Estimate], tolerance_m: float) -> list[Estimate]:
     x, y, _ = o.position_m
-    return any(
-        abs(e.distance_m - x) < tolerance_m
+    return [
+        e
+        for e in estimates
+        if abs(e.distance_m - x) < tolerance_m
         and abs(e.lateral_m - y) < tolerance_m
         and abs(e.width_m - o.size_m[1]) < tolerance_m
-        for e in estimates
+    ]
+
+
+def _best_iou(o: TruthObject, refining: Sequence[Estimate]) -> float:
+    return max(
+        (iou(e.box_px, o.box_px) for e in refining if e.box_px is not None), default=math.nan
     )
 
 
@@ -189,12 +220,14 @@ def score_frame(
     """One frame's verdicts (module docstring): truth objects, the frame's radar targets,
     the search areas built for them, and the estimates to score."""
     vehicles: list[tuple[int, VehicleVerdict]] = []
+    rd_iou: list[float] = []
     for o in objects:
         if not framed(o):
             continue
         verdict: VehicleVerdict
-        if _refined(o, estimates, refined_error_m):
+        if refining := _refining(o, estimates, refined_error_m):
             verdict = "rd"
+            rd_iou.append(_best_iou(o, refining))
         elif not _contained(o, areas):
             verdict = "rfn"
         else:
@@ -207,7 +240,7 @@ def score_frame(
         t = radar[i]
         if not any(lies_on(t.x_m, t.y_m, o) for o in all_vehicles):
             obstacles.append((i, "fp" if i in validated else "nvo"))
-    return FrameVehicles(index, tuple(vehicles), tuple(obstacles))
+    return FrameVehicles(index, tuple(vehicles), tuple(obstacles), tuple(rd_iou))
 
 
 def frame_stats(frames: Sequence[FrameVehicles]) -> FrameStats:
@@ -228,6 +261,7 @@ def frame_stats(frames: Sequence[FrameVehicles]) -> FrameStats:
         rfn_at=tuple(at["rfn"]),
         fp_at=tuple(at["fp"]),
         nvo_at=tuple(at["nvo"]),
+        rd_iou=tuple(v for f in frames for v in f.rd_iou),
     )
 
 

@@ -134,6 +134,24 @@ def test_refined_needs_distance_lateral_and_width_each_within_the_tolerance() ->
     assert verdict(Estimate(20.0, 0.0, 2.21, (0,))) == "fn"
 
 
+def test_each_refined_vehicle_gets_the_best_box_iou_of_the_estimates_that_refine_it() -> None:
+    objects = [car(1, 20.0, 0.0), car(2, 30.0, 4.0)]  # true boxes (0, 0, 10, 10)
+    radar = [target(20.0, 0.0), target(30.0, 4.0)]
+    areas = [area(k, t) for k, t in enumerate(radar)]
+    estimates = [
+        Estimate(20.0, 0.0, 1.8, (0,), (0.0, 0.0, 10.0, 5.0)),  # half the box: 0.5
+        Estimate(20.1, 0.0, 1.8, (0,), (0.0, 0.0, 10.0, 8.0)),  # 0.8, the best of car 1's
+        Estimate(30.0, 4.0, 1.8, (1,), None),  # car 2: refined, but no box
+        Estimate(40.0, 0.0, 1.8, (), (0.0, 0.0, 10.0, 10.0)),  # refines nothing
+    ]
+    frame = score_frame(0, objects, radar, areas, estimates, TOLERANCE_M)
+    assert frame.vehicles == ((1, "rd"), (2, "rd"))
+    assert frame.rd_iou[0] == pytest.approx(0.8) and math.isnan(frame.rd_iou[1])
+    s = frame_stats([frame, frame])
+    assert s.rd_iou_median == pytest.approx(0.8)  # NaN (no box) is left out
+    assert s.rd_iou_share(0.6) == 1.0 and s.rd_iou_share(0.9) == 0.0
+
+
 def test_a_vehicle_wider_than_the_area_is_a_radar_false_negative() -> None:
     truck = car(1, 20.0, 0.0, width_m=2.6)  # wider than the 2.5 m area
     radar = [target(20.0, 0.0)]
@@ -320,6 +338,7 @@ def test_json_has_every_figure_with_its_type(stop_and_go_json: dict) -> None:  #
     for figures in (rec, stop_and_go_json["total"]):
         frames = figures["vehicles"]["frames"]
         assert all(isinstance(frames[k], int) for k in ("rd", "fn", "rfn", "fp", "nvo"))
+        assert all(0.0 < frames[k] <= 1.0 for k in ("rd_iou_median", "rd_iou_good_share"))
         events = figures["vehicles"]["events"]
         assert all(
             isinstance(events[k], int) for k in ("events", "radar_miss", "not_refined", "refined")

@@ -308,6 +308,35 @@ def test_a_moving_target_off_the_cars_centre_still_finds_the_whole_car(
     assert v.lateral_m == pytest.approx(1.0, abs=0.1)
 
 
+@pytest.mark.parametrize(
+    ("cls", "width_m", "height_m", "grey"), [("car", 1.8, 1.5, 70), ("truck", 2.5, 3.8, 110)]
+)
+def test_the_top_rises_to_where_the_vehicles_sides_end(
+    cls: str, width_m: float, height_m: float, grey: int
+) -> None:
+    """Step 11: the box's top is the vehicle's roof, for a car as for a truck taller than
+    the area; without the image (the papers' fixed ratio) a truck's box stops far short."""
+    keys = [(0.0, 20.0 + 3.0, 1.0), (10.0, 20.0 + 3.0, 1.0)]
+    body = Vehicle(1, cls, 6.0, width_m, height_m, grey, Trajectory.from_waypoints(keys))
+    image, labels = RoadRenderer(straight_road(speed_mps=0.0, vehicles=[body]), seed=1)(
+        0.0, camera().extrinsics.pitch_rad
+    )
+    rows = np.flatnonzero((labels == 1).any(axis=1))
+    cam = camera()
+    ego_mps = 20.0  # the vehicle drives at 15 m/s: its area is a moving target's, 4 m wide
+    radar = (target(20.0, 1.2, -5.0 * math.cos(math.atan2(1.2, 20.0 - RADAR_X_M))),)
+    areas = search_areas(image, cam, radar, PARAMS, ego_mps)
+    (v,) = detect_vehicles(areas, radar, cam, PARAMS, image=image).vehicles
+    assert v.box_px[1] == pytest.approx(rows[0] - 0.5, abs=4)  # the roof's row
+    (fixed,) = detect_vehicles(areas, radar, cam, PARAMS).vehicles
+    assert fixed.box_px[3] == v.box_px[3] and fixed.box_px[1] >= v.box_px[1]
+    if cls == "truck":
+        assert fixed.box_px[3] - fixed.box_px[1] < 0.6 * (rows[-1] - rows[0])
+    off = dataclasses.replace(PARAMS, top_search_ratio=0.0)
+    (papers,) = detect_vehicles(areas, radar, cam, off, image=image).vehicles
+    assert papers.box_px == fixed.box_px
+
+
 def test_radar_point_beside_the_car_finds_nothing(
     rendered_car: tuple[np.ndarray, np.ndarray],
 ) -> None:
