@@ -89,7 +89,7 @@ Notes:
       exurban's true people, far and small, score lower (median -0.6). `hog_min_score`
       -1 keeps boxes a little below the SVM's own threshold (0), trading a few far people
       for most false boxes; held-out seed 303 and the real drives are in the README.
-      Each verified box costs one 64x128 HOG descriptor (about 0.1 ms).
+      Each verified box costs one 64x128 HOG descriptor (about 0.2 ms).
 """
 
 from __future__ import annotations

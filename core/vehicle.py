@@ -2,8 +2,9 @@
 section II-C).
 
 For each radar target's search area (`core.search_area`: mapped on the object's base with
-the frame's pitch, W wide, W/2 high, cropped at the image border, resampled to at most
-`resampled_width_px` without enlarging), steps 4-8 run in `core.symmetry`, compiled:
+the frame's pitch, W wide (wider for a moving target), W/2 high, cropped at the image
+border, resampled to at most `resampled_width_px` without enlarging), steps 4-8 run in
+`core.symmetry`, compiled:
 
 4. binarised vertical edges with their sign: horizontal Sobel derivative (3x3) of the
    resampled area, +1 where it exceeds `edge_threshold` (darker to brighter, left to

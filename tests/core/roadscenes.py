@@ -98,3 +98,17 @@ class RoadRenderer:
         frame, _, _ = self._renderer.render(t_s, pitch_rad, 1.0)
         image = camera_noise(frame.image, self._rng) if noise else frame.image
         return image, frame.labels
+
+
+def standing_person(
+    s_m: float, d_m: float, person_id: int = 7, height_m: float = 1.75
+) -> tuple[npt.NDArray[np.uint8], tuple[float, float, float, float]]:
+    """A standing car's noise-free view of a person standing s_m ahead, d_m to the left, on
+    a road without markings, and the person's true box (u0, v0, u1, v1) from the labels."""
+    standing = Trajectory.from_waypoints([(0.0, s_m, d_m), (10.0, s_m, d_m)])
+    person = Pedestrian(person_id, height_m, 150, 40, standing)
+    scene = straight_road(speed_mps=0.0, markings=False, pedestrians=(person,))
+    image, labels = RoadRenderer(scene)(0.0, camera().extrinsics.pitch_rad, noise=False)
+    rows, cols = np.nonzero(labels == person_id)
+    box = (float(cols.min()), float(rows.min()), float(cols.max() + 1), float(rows.max() + 1))
+    return image, box

@@ -29,9 +29,8 @@ from core.baselines import (
     hough_pitch,
 )
 from core.hog import HOG_PERSON_HEIGHT, HogUnavailableError, hog_available
-from core.synth.scene import Pedestrian, Trajectory
 from core.synth.sensors import camera_noise
-from tests.core.roadscenes import RoadRenderer, camera, straight_road
+from tests.core.roadscenes import RoadRenderer, camera, standing_person, straight_road
 
 Box = tuple[float, float, float, float]
 U8 = npt.NDArray[np.uint8]
@@ -62,19 +61,8 @@ def _iou(a: Box, b: Box) -> float:
 
 @cache
 def _person_scene(s_m: float, d_m: float) -> tuple[U8, Box]:
-    """A standing car's noise-free view of a person standing s_m ahead, d_m to the left,
-    and the person's true box (u0, v0, u1, v1) from the label image."""
-    standing = Trajectory.from_waypoints([(0.0, s_m, d_m), (10.0, s_m, d_m)])
-    person = Pedestrian(PERSON_ID, PERSON_HEIGHT_M, 150, 40, standing)
-    scene = straight_road(speed_mps=0.0, markings=False, pedestrians=(person,))
-    image, labels = RoadRenderer(scene)(0.0, camera().extrinsics.pitch_rad, noise=False)
-    rows, cols = np.nonzero(labels == PERSON_ID)
-    return image, (
-        float(cols.min()),
-        float(rows.min()),
-        float(cols.max() + 1),
-        float(rows.max() + 1),
-    )
+    """`roadscenes.standing_person` of the module's person, computed once."""
+    return standing_person(s_m, d_m, PERSON_ID, PERSON_HEIGHT_M)
 
 
 @cache

@@ -7,26 +7,12 @@ import numpy as np
 import pytest
 
 from core.hog import HOG_WINDOW_PX, TRAINING_PERSON_PX, people_scores, window_for
-from core.synth.scene import Pedestrian, Trajectory
-from tests.core.roadscenes import RoadRenderer, camera, straight_road
-
-PERSON_ID = 7
+from tests.core.roadscenes import standing_person
 
 
 def _person_image() -> tuple[np.ndarray, tuple[float, float, float, float]]:
     """A standing person 12 m ahead on a plain road, and their box from the labels."""
-    standing = Trajectory.from_waypoints([(0.0, 12.0, 1.5), (10.0, 12.0, 1.5)])
-    scene = straight_road(
-        speed_mps=0.0, markings=False, pedestrians=(Pedestrian(PERSON_ID, 1.75, 150, 40, standing),)
-    )
-    image, labels = RoadRenderer(scene)(0.0, camera().extrinsics.pitch_rad, noise=False)
-    rows, cols = np.nonzero(labels == PERSON_ID)
-    return image, (
-        float(cols.min()),
-        float(rows.min()),
-        float(cols.max() + 1),
-        float(rows.max() + 1),
-    )
+    return standing_person(12.0, 1.5)
 
 
 def test_the_window_frames_the_box_as_the_training_windows_frame_a_person() -> None:
