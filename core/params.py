@@ -288,11 +288,21 @@ class GuardRailParams:
     max_angle_rad: float = math.radians(45.0)
     # overlapping boxes management (paper 002, III); False: every slow area is searched
     manage_overlaps: bool = True
+    # beyond the paper (core/guardrail.py, step 5): the line must pass the target at least
+    # this high above the road, not along it (kerbs, lane edges, shadows, a parked car's
+    # sill); the papers' preset: -100 (no test)
+    min_line_height_m: float = 0.1
 
     def __post_init__(self) -> None:
         _positive(self, "max_speed_mps", "sobel_threshold")
         _check(self.max_holes >= 0, "max_holes", "an integer >= 0", self.max_holes)
         _fraction(self, "min_length_fraction", "overlap_fraction")
+        _check(
+            math.isfinite(self.min_line_height_m),
+            "min_line_height_m",
+            "a finite height in metres",
+            self.min_line_height_m,
+        )
         _check(
             0.0 <= self.min_angle_rad < math.pi / 2,
             "min_angle_rad",

@@ -21,6 +21,7 @@ from core.guardrail import (
     detect_guard_rails,
     find_start,
     follow_line,
+    line_height_m,
     rail_edges,
     search_line,
 )
@@ -305,6 +306,31 @@ def test_a_rendered_rail_is_a_guard_rail() -> None:
         rows, cols = check.line_px[:, 0], check.line_px[:, 1]
         lower_edge = 20.0 - 8.0 * (cols + 0.5) / W
         assert np.all((rows >= lower_edge - 8) & (rows <= lower_edge + 2))
+
+
+def test_the_lines_height_is_measured_where_it_passes_the_target() -> None:
+    area = area_of(3, static_target(25.0, 6.0, 20.0), np.zeros((H, W), dtype=np.uint8))
+    # the radar point's base: image (232, 222.4) is patch column 32, row 0.7 H = 22.4 (pixel
+    # centres); 64 px across 2.5 m: 25.6 px per metre; the line's point nearest column 32 is
+    # (12, 31)
+    line = np.array([(16, 0), (14, 20), (12, 31), (10, 63)], dtype=np.int32)
+    assert line_height_m(area, line) == pytest.approx((22.4 - 12) / 25.6)
+    assert math.isnan(line_height_m(area, np.zeros((0, 2), dtype=np.int32)))
+
+
+def test_a_line_along_the_road_is_no_guard_rail() -> None:
+    """A rail-like line passing the target at the road (a kerb, a lane's edge, a shadow) is
+    not a guard rail unless the height test is off (the papers' preset)."""
+    rng = np.random.default_rng(0)
+    high = check_of(rail_patch(rng, row_near=20.0), 6.0)
+    low = check_of(rail_patch(rng, row_near=30.0), 6.0)
+    assert high.verdict == "guard_rail" and high.line_height_m >= PARAMS.min_line_height_m
+    assert low.coverage > PARAMS.min_length_fraction  # a line as long as a rail's
+    assert low.line_height_m < PARAMS.min_line_height_m and low.verdict == "not_guard_rail"
+    papers = dataclasses.replace(PARAMS, min_line_height_m=-100.0)
+    area = area_of(3, static_target(25.0, 6.0, 20.0), rail_patch(rng, row_near=30.0))
+    (check,) = detect_guard_rails((area,), 20.0, papers).checks
+    assert check.verdict == "guard_rail"
 
 
 @pytest.mark.parametrize("y_m", [3.0, -3.0])
