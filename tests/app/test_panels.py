@@ -180,9 +180,9 @@ def test_symmetry_tile_marks_the_chosen_axis_and_borders() -> None:
 
 
 def test_symmetry_panel_has_one_tile_per_searched_target() -> None:
-    targets = engine_result().vehicle.targets
+    targets = engine_result("highway", 100).vehicle.targets
     searched = [t for t in targets if t.symmetry.size > 0]
-    assert 3 < len(searched) < len(targets)  # the highway frame has a guard-rail target
+    assert 3 < len(searched) < len(targets)  # this highway frame has guard-rail targets
     h, w = panels.SYMMETRY_TILE_HW_PX
     out = panels.symmetry_panel(targets, columns=3)
     rows = -(-len(searched) // 3)
@@ -193,7 +193,8 @@ def test_symmetry_panel_without_searched_targets_is_the_empty_panel() -> None:
     h, w = panels.SYMMETRY_TILE_HW_PX
     expected = panels.empty_panel("no radar target searched", (h + STRIP, w))
     np.testing.assert_array_equal(panels.symmetry_panel([]), expected)
-    unsearched = [t for t in engine_result().vehicle.targets if t.symmetry.size == 0]
+    unsearched = [t for t in engine_result("highway", 100).vehicle.targets if t.symmetry.size == 0]
+    assert unsearched  # the guard-rail targets
     np.testing.assert_array_equal(panels.symmetry_panel(unsearched), expected)
 
 
