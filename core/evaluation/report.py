@@ -54,6 +54,7 @@ IOU_GOOD = 0.6
 
 
 def _fixed(x: float) -> str:
+    """Two places; "-" for none (NaN: no frame had the figure, e.g. a true pitch)."""
     return "-" if math.isnan(x) else f"{x:.2f}"
 
 
@@ -424,9 +425,9 @@ def tables(
                     _pct(r.motion_stereo.obstacles_hit, r.motion_stereo.obstacles),
                     f"{r.motion_stereo.pixel_recall:.0%}",
                     f"{r.motion_stereo.pixel_precision:.0%}",
-                    _deg(r.pitch.rms_deg),
-                    _deg(r.pitch.max_deg),
-                    _deg(r.pitch.calibration_rms_deg),
+                    _fixed(r.pitch.rms_deg),
+                    _fixed(r.pitch.max_deg),
+                    _fixed(r.pitch.calibration_rms_deg),
                 )
                 for r in rows
             ),
@@ -632,7 +633,7 @@ HEADLINE_FIGURES: tuple[tuple[str, Callable[[RecordingReport], str]], ...] = (
     ("vehicles labelled guard rail", lambda r: str(r.guardrails.vehicles_labelled)),
     ("guard-rail FN / FP", _rail_errors),
     ("pedestrians recall / precision", lambda r: _rp(r.pedestrians[FINAL_PEDESTRIAN_STAGE])),
-    ("pitch RMS deg", lambda r: _deg(r.pitch.rms_deg)),
+    ("pitch RMS deg", lambda r: _fixed(r.pitch.rms_deg)),
     ("tracked vehicles MOTA", _vehicle_mota),
 )
 
@@ -693,8 +694,3 @@ def format_csv(reports: Sequence[RecordingReport], total: RecordingReport) -> st
         for name, value in flat:
             writer.writerow((r.name, name, "" if value is None else value))
     return buffer.getvalue()
-
-
-def _deg(value: float) -> str:
-    """Degrees to two places; "-" for none (no frame had a true pitch)."""
-    return "-" if math.isnan(value) else f"{value:.2f}"

@@ -41,6 +41,7 @@ Where the paper is ambiguous, and what was chosen:
 from __future__ import annotations
 
 import math
+import statistics
 from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -127,11 +128,8 @@ class FrameStats:
     @property
     def rd_iou_median(self) -> float:
         """Median box IoU of the RD with a box (NaN without one)."""
-        known = sorted(v for v in self.rd_iou if not math.isnan(v))
-        if not known:
-            return math.nan
-        mid = len(known) // 2
-        return known[mid] if len(known) % 2 else (known[mid - 1] + known[mid]) / 2
+        known = [v for v in self.rd_iou if not math.isnan(v)]
+        return statistics.median(known) if known else math.nan
 
     def rd_iou_share(self, at_least: float) -> float:
         """Share of the RD with a box whose IoU reaches `at_least` (NaN without one)."""
