@@ -5,8 +5,8 @@
 1. pitch (II-A), with the previous frame's horizon memory and its vehicle boxes left out;
 2. the camera model for this frame (the calibrated camera with the detected pitch);
 3. motion stereo (II-B) on the bird's-eye view, with the car's motion since the last frame;
-4. the search areas of the radar targets, and the guard-rail filter on the slow ones
-   (paper 002);
+4. the search areas of the radar targets (wider where the tracker expects a vehicle it
+   follows, `Tracker.predicted`), and the guard-rail filter on the slow ones (paper 002);
 5. vehicle detection by symmetry on the others (II-C, paper 001);
 6. pedestrian detection with both fusion filters (II-D);
 7. tracking of vehicles, pedestrians and guard-rail targets (`core.tracking`, beyond the
@@ -40,7 +40,8 @@ Replay tolerance (what a seek reproduces of playing the drive from its start):
       obstacle mask agrees except where a cell's mean sits on the threshold;
     - the tracker restarts: its ids differ from a playback's, and a track confirmed before
       the window is confirmed again within `confirm_frames` of its start; a track older
-      than the window carries less history and a less settled velocity;
+      than the window carries less history and a less settled velocity; the search areas
+      that tracks widen (`core.search_area`) follow the replayed tracks;
     - pitch's horizon tracking and the vehicle boxes it leaves out depend on one frame
       back, and are rebuilt by the first replayed frame.
     `tests/core/test_engine.py` checks these on a bundled drive.
@@ -382,8 +383,11 @@ class FusionEngine:
         ego = frame.ego if self._last is not None else None
         motion, motion_ms = _timed(lambda: self._motion_stereo.update(image, camera, ego))
 
+        dt_s = 0.0 if self._last is None else max((frame.t_ns - self._last.t_ns) / NS_PER_S, 0.0)
+
         def guard() -> tuple[tuple[SearchArea, ...], GuardRailResult]:
-            areas = search_areas(image, camera, frame.radar, p.vehicle, frame.speed_mps)
+            tracked_m = [(t.x_m, t.y_m) for t in self._tracker.predicted("vehicle", ego, dt_s)]
+            areas = search_areas(image, camera, frame.radar, p.vehicle, frame.speed_mps, tracked_m)
             return areas, detect_guard_rails(areas, frame.speed_mps, p.guardrail)
 
         (areas, rails), rails_ms = _timed(guard)
@@ -405,11 +409,8 @@ class FusionEngine:
                 p.pedestrian,
             )
         )
-        dt_s = 0.0 if self._last is None else (frame.t_ns - self._last.t_ns) / NS_PER_S
         measurements = tracker_measurements(vehicle, pedestrian, areas, rails.guard_rail_targets)
-        tracks, tracking_ms = _timed(
-            lambda: self._tracker.update(measurements, ego, max(dt_s, 0.0))
-        )
+        tracks, tracking_ms = _timed(lambda: self._tracker.update(measurements, ego, dt_s))
         # read-only: the next frame reads it, and a kept state holds it by reference
         pitch.memory.row_histogram.flags.writeable = False
         self._pitch_memory = pitch.memory

@@ -175,6 +175,10 @@ class VehicleParams:
     # search_width_m area (the papers' preset: search_width_m for every target)
     moving_search_width_m: float = 4.0
     moving_speed_mps: float = 3.0
+    # beyond the papers (core/search_area.py Notes): a target within track_gate_m of where
+    # the tracker expects a confirmed vehicle track on this frame is that vehicle's, and gets
+    # the moving targets' area however slow it is (0: off, the papers' preset)
+    track_gate_m: float = 1.5
     search_height_ratio: float = 0.5  # paper 001: "area height is ... half of its width"
     # paper 001: bottom at 30% of area height below the radar point
     search_bottom_fraction: float = 0.3
@@ -232,6 +236,12 @@ class VehicleParams:
             "min_height_ratio",
             "narrow_width_m",
             "merge_max_gap_m",
+        )
+        _check(
+            math.isfinite(self.track_gate_m) and self.track_gate_m >= 0,
+            "track_gate_m",
+            "a distance >= 0 (0: off)",
+            self.track_gate_m,
         )
         _fraction(
             self,
@@ -372,10 +382,14 @@ class PedestrianParams:
     radar_gate_distance_fraction: float = 0.2
     # beyond the papers (core/pedestrian.py, step 6): a box that passed every filter is kept
     # only when OpenCV's HOG people SVM scores its window at least hog_min_score (the SVM's
-    # own threshold is 0; core/hog.py); verify_with_hog False keeps every box (the papers'
-    # preset)
+    # own threshold is 0; core/hog.py); a box motion stereo did not mark, but that passed
+    # the other filters, is kept when the SVM scores it at least
+    # hog_without_motion_min_score (a score no window reaches, such as 100, keeps the
+    # paper's motion-stereo filter as it is); verify_with_hog False keeps every box that
+    # passed the filters and scores none (the papers' preset)
     verify_with_hog: bool = True
-    hog_min_score: float = -1.0
+    hog_min_score: float = 0.3
+    hog_without_motion_min_score: float = 0.5
 
     def __post_init__(self) -> None:
         _positive(
@@ -431,12 +445,8 @@ class PedestrianParams:
             "a distance >= 0 (0: no radar filter)",
             self.radar_gate_lateral_m,
         )
-        _check(
-            math.isfinite(self.hog_min_score),
-            "hog_min_score",
-            "a finite number",
-            self.hog_min_score,
-        )
+        for name in ("hog_min_score", "hog_without_motion_min_score"):
+            _check(math.isfinite(getattr(self, name)), name, "a finite number", getattr(self, name))
 
 
 @dataclass(frozen=True)

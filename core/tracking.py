@@ -542,6 +542,35 @@ class Tracker:
         self._tracks = [t.copied() for t in state.tracks]
         self._next_id = state.next_id
 
+    def _move_and_predict(
+        self, tracks: Sequence[_TrackState], ego: EgoMotion | None, dt_s: float
+    ) -> None:
+        """Steps 1-2 on `tracks`, in place."""
+        p = self.params
+        if ego is None:
+            lost_var_m2 = p.unknown_ego_sigma_m**2
+            for track in tracks:
+                track.stay(lost_var_m2)
+        else:
+            cos, sin = math.cos(-ego.dyaw_rad), math.sin(-ego.dyaw_rad)
+            dx_m, dy_m = float(ego.dx_m), float(ego.dy_m)
+            for track in tracks:
+                track.move(cos, sin, dx_m, dy_m)
+        noise = _process_noise(p, dt_s)
+        width_growth_m2 = p.width_walk_m2ps * dt_s
+        for track in tracks:
+            track.predict(dt_s, noise[track.kind], width_growth_m2)
+
+    def predicted(self, kind: Kind, ego: EgoMotion | None, dt_s: float) -> tuple[Track, ...]:
+        """The confirmed tracks of `kind` as the next `update(..., ego, dt_s)` will have moved
+        and predicted them (steps 1-2) before it associates any measurement: where this
+        frame's detections of them are expected. The tracker itself does not change."""
+        _require_kind("kind", kind)
+        require_finite("dt_s", dt_s)
+        ahead = [t.copied() for t in self._tracks if t.kind == kind and t.confirmed]
+        self._move_and_predict(ahead, ego, max(dt_s, 0.0))
+        return tuple(t.snapshot() for t in ahead)
+
     def update(
         self, measurements: Sequence[Measurement], ego: EgoMotion | None, dt_s: float
     ) -> TrackResult:
@@ -561,20 +590,7 @@ class Tracker:
             raise ValueError(f"measurements: (kind, source_index) {twice} appears twice")
         p = self.params
         tracks = self._tracks
-        # 1-2. ego compensation and prediction
-        if ego is None:
-            lost_var_m2 = p.unknown_ego_sigma_m**2
-            for track in tracks:
-                track.stay(lost_var_m2)
-        else:
-            cos, sin = math.cos(-ego.dyaw_rad), math.sin(-ego.dyaw_rad)
-            dx_m, dy_m = float(ego.dx_m), float(ego.dy_m)
-            for track in tracks:
-                track.move(cos, sin, dx_m, dy_m)
-        noise = _process_noise(p, dt_s)
-        width_growth_m2 = p.width_walk_m2ps * dt_s
-        for track in tracks:
-            track.predict(dt_s, noise[track.kind], width_growth_m2)
+        self._move_and_predict(tracks, ego, dt_s)  # 1-2
         # 3. association, per kind
         zs = [(float(m.x_m), float(m.y_m)) for m in measurements]
         rs = [_measurement_var(p, m.kind, m.x_m) for m in measurements]

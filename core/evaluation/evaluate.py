@@ -139,8 +139,14 @@ def _track_estimates(result: FrameResult) -> list[Estimate]:
     ]
 
 
-def _truth_vehicles(truth: FrameTruth) -> list[tuple[int, objects.Box]]:
-    return [(o.id, o.box_px) for o in truth.objects if vehicles.framed(o)]
+def _truth_vehicles(
+    truth: FrameTruth,
+) -> tuple[list[tuple[int, objects.Box]], list[objects.Box]]:
+    """The framed vehicles the radar saw, to be tracked, and the boxes of those it did not,
+    ignored: a radar-guided tracker cannot follow what the radar never returned."""
+    framed = [o for o in truth.objects if vehicles.framed(o)]
+    seen = [(o.id, o.box_px) for o in framed if o.radar_seen]
+    return seen, [o.box_px for o in framed if not o.radar_seen]
 
 
 def _truth_people(truth: FrameTruth, params: Params) -> list[tuple[int, objects.Box]]:
@@ -233,7 +239,8 @@ class _Scorer:
         self.pitch.append(
             objects.score_pitch(result.pitch.pitch_rad, truth.pitch_rad, calibrated_rad)
         )
-        self.vehicle_mot.update(i, _truth_vehicles(truth), _track_boxes(result.tracked_vehicles))
+        seen, unseen = _truth_vehicles(truth)
+        self.vehicle_mot.update(i, seen, _track_boxes(result.tracked_vehicles), unseen)
         self.pedestrian_mot.update(
             i, _truth_people(truth, p), _track_boxes(result.tracked_pedestrians)
         )

@@ -9,6 +9,11 @@ matched to. MOTA = 1 - (misses + false positives + id switches) / truth objects;
 mean IoU of the matched pairs. IDF1 assigns truth ids to track ids once for the whole
 sequence, maximising the frames each pair matches (IDTP); IDF1 = 2 IDTP / (truth objects +
 track boxes).
+
+Objects that are there but not to be tracked (vehicles the radar never saw, for a
+radar-guided tracker) are "ignored" boxes, as MOT16's distractors: a track left unmatched
+after the assignment that overlaps one by IOU_MATCH is left out of the figures, neither a
+false positive nor a track box.
 """
 
 from __future__ import annotations
@@ -70,8 +75,10 @@ class MotAccumulator:
         index: int,
         truth: Sequence[tuple[int, Box]],
         tracks: Sequence[tuple[int, Box]],
+        ignored: Sequence[Box] = (),
     ) -> None:
-        """One frame: (truth id, box) of the objects to track, (track id, box) reported."""
+        """One frame: (truth id, box) of the objects to track, (track id, box) reported, and
+        the boxes of objects neither to track nor to count as false (module docstring)."""
         overlap = np.array([[iou(t, h) for _, h in tracks] for _, t in truth]).reshape(
             len(truth), len(tracks)
         )
@@ -104,11 +111,17 @@ class MotAccumulator:
             self._last_match[tid] = hid
             self._previous[tid] = hid
             self._iou_sum += float(overlap[a, b])
+        matched = set(pairs.values())
+        left_out = sum(
+            1
+            for b, (_, box) in enumerate(tracks)
+            if b not in matched and any(iou(box, g) >= IOU_MATCH for g in ignored)
+        )
         self._truth += len(truth)
-        self._hyp += len(tracks)
+        self._hyp += len(tracks) - left_out
         self._matches += len(pairs)
         self._misses += len(truth) - len(pairs)
-        self._fp += len(tracks) - len(pairs)
+        self._fp += len(tracks) - len(pairs) - left_out
 
     def score(self) -> MotScore:
         truth_ids = sorted({t for t, _ in self._pair_frames})

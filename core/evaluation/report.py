@@ -438,7 +438,7 @@ def tables(
                 "recording",
                 "vehicles RD / FN / RFN",
                 "events refined",
-                "vehicles MOTA / MOTP / IDF1",
+                "radar-seen vehicles MOTA / MOTP / IDF1",
                 "id switches",
                 "pedestrians MOTA / MOTP / IDF1",
                 "id switches",
@@ -634,7 +634,7 @@ HEADLINE_FIGURES: tuple[tuple[str, Callable[[RecordingReport], str]], ...] = (
     ("guard-rail FN / FP", _rail_errors),
     ("pedestrians recall / precision", lambda r: _rp(r.pedestrians[FINAL_PEDESTRIAN_STAGE])),
     ("pitch RMS deg", lambda r: _fixed(r.pitch.rms_deg)),
-    ("tracked vehicles MOTA", _vehicle_mota),
+    ("tracked radar-seen vehicles MOTA", _vehicle_mota),
 )
 
 

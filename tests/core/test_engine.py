@@ -28,6 +28,9 @@ SEEK_STEP = 15  # frames between the seeks compared with the playback
 MASK_AGREEMENT = 0.998  # share of obstacle cells a seek reproduces (today 0.9986)
 TRACK_MATCH_M = 1.0  # a confirmed track of the playback has a seek counterpart this close
 TRACK_AGREEMENT = 0.7  # share of the playback's confirmed tracks with such a counterpart
+# share of seeks whose search areas differ from the playback's, because a track confirmed
+# before the replayed window widened an area there (today 1 of 10)
+AREAS_APART = 0.2
 
 
 def _playback(name: str) -> tuple[FrameResult, ...]:
@@ -66,13 +69,19 @@ def test_a_seek_reproduces_the_playback_within_the_replay_tolerance(
 ) -> None:
     played = _playback(SEEK_DRIVE)
     window = replay_window(Params())
-    matched = total = 0
+    matched = total = seeks = widened_apart = 0
     for i in range(0, len(played), SEEK_STEP):
         a, b = played[i], _seek(SEEK_DRIVE, i)
+        seeks += 1
         assert b.index == i and b.replayed == min(i, window)
         assert b.pitch.pitch_rad == a.pitch.pitch_rad
         same = np.mean(a.motion_stereo.obstacles == b.motion_stereo.obstacles)
         assert same >= MASK_AGREEMENT
+        # the areas the tracker widens follow the replayed tracks: where they differ, what
+        # was found in them may too
+        if [ar.full_px for ar in b.areas] != [ar.full_px for ar in a.areas]:
+            widened_apart += 1
+            continue
         assert [v.box_px for v in b.vehicle.vehicles] == [v.box_px for v in a.vehicle.vehicles]
         assert b.guardrail.guard_rail_targets == a.guardrail.guard_rail_targets
         assert [(c.extended_box_px, c.verdict) for c in b.pedestrian.candidates] == [
@@ -86,9 +95,11 @@ def test_a_seek_reproduces_the_playback_within_the_replay_tolerance(
             )
     report(
         f"engine seek on {SEEK_DRIVE} (window {window} frames): {matched}/{total} confirmed "
-        "tracks of the playback rebuilt"
+        f"tracks of the playback rebuilt; {widened_apart}/{seeks} seeks with areas widened "
+        "otherwise"
     )
     assert matched >= TRACK_AGREEMENT * total
+    assert widened_apart <= AREAS_APART * seeks
 
 
 def test_seeking_the_next_frame_processes_just_it() -> None:

@@ -17,7 +17,7 @@ import pytest
 from core.cli import DEFAULT_RECORDINGS, main
 from core.evaluation import report
 from core.evaluation.evaluate import RecordingReport, evaluate_recording, total
-from core.evaluation.mot import MotAccumulator
+from core.evaluation.mot import IOU_MATCH, MotAccumulator
 from core.evaluation.objects import (
     RAIL_HEIGHT_M,
     score_mask,
@@ -37,6 +37,7 @@ from core.evaluation.vehicles import (
 from core.io.frame import RadarTarget
 from core.io.groundtruth import FrameTruth, TruthObject
 from core.params import MotionStereoParams, Params, params_from
+from core.search_area import iou
 from tests.conftest import REAL_IMPORTS
 
 TOLERANCE_M = 0.4
@@ -291,6 +292,24 @@ def test_perfect_tracking_scores_one() -> None:
         acc.update(i, [(1, _box(10 * i)), (2, _box(300))], [(7, _box(10 * i)), (8, _box(300))])
     s = acc.score()
     assert (s.mota, s.motp, s.idf1, s.id_switches) == (1.0, 1.0, 1.0, 0)
+
+
+def test_a_track_on_an_ignored_object_is_neither_a_hit_nor_false() -> None:
+    acc = MotAccumulator()
+    # object 1 tracked by 7; track 8 follows an object the radar never saw (ignored); track 9
+    # overlaps the ignored box by less than IOU_MATCH and stays false
+    ignored = _box(300)
+    barely = (300.0 + 20.0 * (1 - IOU_MATCH) + 1.0, 100.0, 340.0, 140.0)
+    assert iou(barely, ignored) < IOU_MATCH
+    acc.update(0, [(1, _box(0))], [(7, _box(0)), (8, _box(300))], [ignored])
+    acc.update(1, [(1, _box(0))], [(7, _box(0)), (9, barely)], [ignored])
+    s = acc.score()
+    assert (s.truth, s.hypotheses, s.matches, s.false_positives) == (2, 3, 2, 1)
+    assert s.mota == pytest.approx(1 - 1 / 2)
+    # an ignored box never takes a track away from an object to track
+    acc = MotAccumulator()
+    acc.update(0, [(1, _box(0))], [(7, _box(0))], [_box(0)])
+    assert (acc.score().matches, acc.score().false_positives) == (1, 0)
 
 
 def test_an_id_switch_a_miss_and_a_false_positive() -> None:

@@ -131,11 +131,26 @@ def test_poles_and_trunks_are_pruned_by_the_constraints(what: str, verdicts: set
 
 def test_a_person_outside_the_motion_stereo_mask_is_rejected_with_that_reason() -> None:
     image, labels = _scene("person")
-    result = _detect(image, mask_value=0)
+    # the paper's filter alone (no verification): dropped, never scored
+    papers = replace(PARAMS, verify_with_hog=False)
+    result = _detect(image, mask_value=0, params=papers)
     assert not result.kept
     (found,) = result.rejected_by_motion_stereo
     assert found.obstacle_fraction == 0.0
+    assert math.isnan(found.hog_score)
     assert _on(result, _truth_box(labels)) == ["motion_stereo"]
+    # with the verification the SVM may keep it, at the stricter threshold for unmarked boxes
+    (marked,) = _detect(image).kept
+    assert marked.hog_score > PARAMS.hog_without_motion_min_score
+    (kept,) = _detect(image, mask_value=0).kept
+    assert kept.hog_score == pytest.approx(marked.hog_score)
+    strict = replace(PARAMS, hog_without_motion_min_score=marked.hog_score + 0.01)
+    result = _detect(image, mask_value=0, params=strict)
+    assert not result.kept
+    (dropped,) = result.rejected_by_motion_stereo
+    assert dropped.hog_score == pytest.approx(marked.hog_score)
+    # a marked box needs only hog_min_score
+    assert _detect(image, params=strict).kept
 
 
 def test_a_person_inside_a_detected_vehicle_is_rejected_with_that_reason() -> None:
@@ -195,7 +210,8 @@ def test_the_hog_verification_keeps_a_person_and_says_why_it_drops_a_box() -> No
     (kept,) = _detect(image, params=papers).kept
     assert math.isnan(kept.hog_score)
     # only boxes that passed every filter are scored
-    rejected = _detect(image, mask_value=0).candidates
+    u0, v0, u1, v1 = _truth_box(labels)
+    rejected = _detect(image, vehicles=((u0 - 20, v0 - 10, u1 + 20, v1 + 5),)).candidates
     assert rejected and all(math.isnan(c.hog_score) for c in rejected)
 
 

@@ -184,6 +184,37 @@ def test_a_detection_missing_for_one_frame_keeps_its_track_and_id() -> None:
     assert (track.hits, track.misses, track.age) == (9, 0, 10)
 
 
+def test_predicted_gives_where_the_next_update_expects_confirmed_tracks() -> None:
+    tracker = Tracker(P)
+    ego = EgoMotion(dx_m=1.0, dy_m=0.0, dyaw_rad=0.0, dt_s=DT_S)
+    assert tracker.predicted("vehicle", ego, DT_S) == ()
+    # a car 20 m ahead keeping pace with the ego car (its ground speed that of the ego car)
+    for _ in range(P.confirm_frames + 20):
+        tracker.update([_m(20.0, 1.0), _m(8.0, -3.0, 0, "pedestrian")], ego, DT_S)
+    before = tracker.state()
+    (ahead,) = tracker.predicted("vehicle", ego, DT_S)
+    # the ego car moves 1 m, the car as much: still 20 m ahead
+    assert (ahead.x_m, ahead.y_m) == pytest.approx((20.0, 1.0), abs=0.05)
+    assert ahead.confirmed and ahead.kind == "vehicle"
+    # the tracker is unchanged: the next update gives what it gave without the look ahead
+    (expected,) = tracker.update([], ego, DT_S).of_kind("vehicle")
+    tracker.restore(before)
+    tracker.predicted("vehicle", ego, DT_S)
+    (again,) = tracker.update([], ego, DT_S).of_kind("vehicle")
+    assert (again.x_m, again.y_m, again.sigma_x_m) == (
+        expected.x_m,
+        expected.y_m,
+        expected.sigma_x_m,
+    )
+    assert (again.x_m, again.y_m) == pytest.approx((ahead.x_m, ahead.y_m))
+    # tentative tracks are not expected anywhere
+    fresh = Tracker(P)
+    fresh.update([_m(20.0, 1.0)], ego, DT_S)
+    assert fresh.predicted("vehicle", ego, DT_S) == ()
+    with pytest.raises(ValueError, match="kind"):
+        tracker.predicted("car", ego, DT_S)  # type: ignore[arg-type]
+
+
 def test_a_confirmed_track_is_kept_through_max_missed_frames_then_ended() -> None:
     tracker = Tracker(P)
     for _ in range(P.confirm_frames):

@@ -102,6 +102,26 @@ def test_a_target_moving_over_ground_gets_the_wider_area() -> None:
     assert area.patch.shape == (round(40 * 0.5), 64)
 
 
+def test_a_still_target_where_a_tracked_vehicle_is_expected_gets_the_wider_area() -> None:
+    cam = flat_camera()
+    image = np.zeros((480, 640), dtype=np.uint8)
+    ego_mps = 20.0
+    bearing = math.atan2(1.0, 25.0 - RADAR_X_M)
+    still = target(25.0, 1.0, -ego_mps * math.cos(bearing))  # a stopped car
+    gate = PARAMS.track_gate_m
+
+    def width(tracked_m: list[tuple[float, float]], params: VehicleParams = PARAMS) -> float:
+        (a,) = search_areas(image, cam, (still,), params, ego_mps, tracked_m)
+        return a.y_left_m - a.y_right_m
+
+    assert width([]) == pytest.approx(PARAMS.search_width_m)
+    assert width([(25.0 + 0.9 * gate, 1.0)]) == pytest.approx(PARAMS.moving_search_width_m)
+    assert width([(25.0, 1.0 - 0.9 * gate)]) == pytest.approx(PARAMS.moving_search_width_m)
+    assert width([(25.0 + 1.1 * gate, 1.0), (40.0, -3.0)]) == pytest.approx(2.5)
+    off = dataclasses.replace(PARAMS, track_gate_m=0.0)
+    assert width([(25.0 + 0.9 * gate, 1.0)], off) == pytest.approx(2.5)
+
+
 def test_far_areas_are_not_enlarged_and_border_areas_are_cropped() -> None:
     cam = flat_camera()
     image = np.zeros((480, 640), dtype=np.uint8)
