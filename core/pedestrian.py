@@ -102,7 +102,7 @@ Notes:
       SVM tells them from posts without it: a box motion stereo did not mark is kept when
       the SVM scores it at least 0.5, one it marked at least 0.3 (`hog_min_score`, was -1,
       which let 0.1-0.28 false boxes per frame through on highway drives). Seeds 101 and
-      202 (tuning) and 404 and 505 (checking), final recall / precision, before -> after:
+      202 (tuning) and 404, 505 and 707 (checking), final recall / precision, before -> after:
       exurban 0.03-0.10 / 0.67-0.84 -> 0.17-0.22 / 0.97-1.00, stop_and_go 0.36-0.45 /
       0.99-1.00 -> 0.48-0.59 / 0.99-1.00; false boxes per frame on highway 0.07-0.28 ->
       0.01-0.03; nuScenes 0.07 -> 0.03 (and one true box); aiMotive 0 both. Without
