@@ -70,6 +70,13 @@ def _ratio(part: int, whole: int) -> float | None:
     return round(part / whole, 4) if whole else None
 
 
+def _distance_errors(s: FrameStats) -> str:
+    """The distance error's signed median and the 90th percentile of its size, metres."""
+    if not s.distance_error_m:
+        return "-"
+    return f"{s.distance_error_median_m:+.2f} / {s.distance_error_p90_m:.2f}"
+
+
 def _pairs(at: Sequence[tuple[int, int]]) -> list[list[int]]:
     return [[frame, what] for frame, what in at]
 
@@ -87,6 +94,8 @@ def _frames_json(s: FrameStats, listings: bool) -> dict[str, Any]:
         "rfn_share": _ratio(s.rfn, s.framed),
         "rd_iou_median": _share(s.rd_iou_median),
         "rd_iou_good_share": _share(s.rd_iou_share(IOU_GOOD)),
+        "distance_error_median_m": _share(s.distance_error_median_m),
+        "distance_error_p90_m": _share(s.distance_error_p90_m),
     }
     if listings:
         out |= {
@@ -343,6 +352,7 @@ def tables(
                 "NVO",
                 "RD box IoU median",
                 f"RD box IoU >= {IOU_GOOD:g}",
+                "distance error m: median / p90 of size",
             ),
             tuple(
                 (
@@ -356,6 +366,7 @@ def tables(
                     str(r.vehicles.nvo),
                     _fixed(r.vehicles.rd_iou_median),
                     _percent(r.vehicles.rd_iou_share(IOU_GOOD)),
+                    _distance_errors(r.vehicles),
                 )
                 for r in rows
             ),

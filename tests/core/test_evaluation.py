@@ -27,6 +27,7 @@ from core.evaluation.objects import (
 )
 from core.evaluation.report import BASELINE_TIMING_TITLE, TIMED_TITLES
 from core.evaluation.vehicles import (
+    DISTANCE_MATCH_M,
     EVENT_MIN_FRAMES,
     Estimate,
     FrameVehicles,
@@ -120,6 +121,28 @@ def test_frame_statistics_on_a_twelve_frame_example() -> None:
     assert s.rfn_at == tuple((i, 2) for i in range(11))
     assert s.fp_at == ((0, 2), (1, 2))
     assert s.nvo_at == tuple((i, 2) for i in range(2, 12))
+
+
+def test_the_distance_error_of_every_vehicle_found_across() -> None:
+    frames = _twelve_frames()
+    # car 1: +0.1 m on frames 0-5, +1.0 m on 6-8 (found across, not refined), none on 9-11;
+    # car 2: +0.2 m on frame 11; the hidden car 3 and the sign count not
+    assert [f.distance_error_m for f in frames[5:9]] == [(pytest.approx(0.1),)] + [
+        (pytest.approx(1.0),)
+    ] * 3
+    assert frames[11].distance_error_m == (pytest.approx(0.2),)
+    s = frame_stats(frames)
+    assert len(s.distance_error_m) == 10
+    assert s.distance_error_median_m == pytest.approx(0.1)
+    assert s.distance_error_p90_m == pytest.approx(1.0)
+    # an estimate found across but farther than DISTANCE_MATCH_M measures nothing
+    objects, radar = [car(1, 20.0, 0.0)], [target(20.0, 0.0)]
+    far = Estimate(20.0 + DISTANCE_MATCH_M + 0.1, 0.0, 1.8, (0,))
+    assert (
+        score_frame(0, objects, radar, [area(0, radar[0])], [far], TOLERANCE_M).distance_error_m
+        == ()
+    )
+    assert math.isnan(frame_stats([]).distance_error_median_m)
 
 
 def test_refined_needs_distance_lateral_and_width_each_within_the_tolerance() -> None:
