@@ -386,7 +386,11 @@ class FusionEngine:
         dt_s = 0.0 if self._last is None else max((frame.t_ns - self._last.t_ns) / NS_PER_S, 0.0)
 
         def guard() -> tuple[tuple[SearchArea, ...], GuardRailResult]:
-            tracked_m = [(t.x_m, t.y_m) for t in self._tracker.predicted("vehicle", ego, dt_s)]
+            tracked_m = (
+                [(t.x_m, t.y_m) for t in self._tracker.predicted("vehicle", ego, dt_s)]
+                if p.vehicle.track_gate_m > 0
+                else []
+            )
             areas = search_areas(image, camera, frame.radar, p.vehicle, frame.speed_mps, tracked_m)
             return areas, detect_guard_rails(areas, frame.speed_mps, p.guardrail)
 

@@ -497,11 +497,8 @@ def line_height_m(area: SearchArea, line_px: PixelArray) -> float:
     (NaN without a line)."""
     if len(line_px) == 0:
         return math.nan
-    h, w = area.patch.shape
-    c0, r0, c1, r1 = area.box_px
-    # the radar point's base in patch pixel-centre coordinates
-    base_col = (area.base_px[0] - c0 + 0.5) * w / (c1 - c0) - 0.5
-    base_row = (area.base_px[1] - r0 + 0.5) * h / (r1 - r0) - 0.5
+    col, row = area.to_patch_px(*area.base_px)
+    base_col, base_row = col - 0.5, row - 0.5  # pixel-centre coordinates, as line_px
     nearest = int(np.argmin(np.abs(line_px[:, 1] - base_col)))
     return float(base_row - line_px[nearest, 0]) / area.px_per_m
 

@@ -114,6 +114,13 @@ class SearchArea:
         """True when part of the area lies outside the image."""
         return self.box_px != tuple(math.ceil(b) for b in self.full_px)
 
+    def to_patch_px(self, u: float, v: float) -> tuple[float, float]:
+        """Image coordinates (u, v) -> patch pixel-edge coordinates (col, row), the inverse
+        of `to_image_px`."""
+        c0, r0, c1, r1 = self.box_px
+        h, w = self.patch.shape
+        return (u - c0 + 0.5) * w / (c1 - c0), (v - r0 + 0.5) * h / (r1 - r0)
+
     def to_image_px(
         self, cols: npt.ArrayLike, rows: npt.ArrayLike
     ) -> tuple[FloatArray, FloatArray]:

@@ -218,12 +218,11 @@ class VehicleResult:
 def _search(area: SearchArea, params: VehicleParams) -> TargetResult:
     """Steps 4-8 on one area (`core.symmetry.search`); the verdict says only whether an
     axis or a box was found (`detect_vehicles` settles it)."""
-    h, w = area.patch.shape
-    c0, _, c1, _ = area.box_px
+    h = area.patch.shape[0]
     threshold = params.symmetry_threshold * h
     edges, chi, found, chosen = symmetry.search(
         area.patch,
-        (area.base_px[0] - c0 + 0.5) * w / (c1 - c0),  # the radar point's column
+        area.to_patch_px(*area.base_px)[0],  # the radar point's column
         float(params.edge_threshold),
         params.max_half_width_px,
         threshold,

@@ -214,26 +214,27 @@ def _contained(o: TruthObject, areas: Sequence[Area]) -> bool:
     )
 
 
+def _across(o: TruthObject, e: Estimate, tolerance_m: float) -> bool:
+    """The estimate finds o across: lateral position and width within the tolerance."""
+    return abs(e.lateral_m - o.position_m[1]) < tolerance_m and (
+        abs(e.width_m - o.size_m[1]) < tolerance_m
+    )
+
+
 def _refining(o: TruthObject, estimates: Sequence[Estimate], tolerance_m: float) -> list[Estimate]:
-    x, y, _ = o.position_m
+    x = o.position_m[0]
     return [
-        e
-        for e in estimates
-        if abs(e.distance_m - x) < tolerance_m
-        and abs(e.lateral_m - y) < tolerance_m
-        and abs(e.width_m - o.size_m[1]) < tolerance_m
+        e for e in estimates if abs(e.distance_m - x) < tolerance_m and _across(o, e, tolerance_m)
     ]
 
 
 def _distance_error_m(o: TruthObject, estimates: Sequence[Estimate], tolerance_m: float) -> float:
     """Distance error of the estimate that finds o across nearest in distance (NaN: none)."""
-    x, y, _ = o.position_m
+    x = o.position_m[0]
     errors = [
         e.distance_m - x
         for e in estimates
-        if abs(e.lateral_m - y) < tolerance_m
-        and abs(e.width_m - o.size_m[1]) < tolerance_m
-        and abs(e.distance_m - x) < DISTANCE_MATCH_M
+        if _across(o, e, tolerance_m) and abs(e.distance_m - x) < DISTANCE_MATCH_M
     ]
     return min(errors, key=abs, default=math.nan)
 

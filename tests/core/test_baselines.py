@@ -29,6 +29,7 @@ from core.baselines import (
     hough_pitch,
 )
 from core.hog import HOG_PERSON_HEIGHT, HogUnavailableError, hog_available
+from core.search_area import iou
 from core.synth.sensors import camera_noise
 from tests.core.roadscenes import RoadRenderer, camera, standing_person, straight_road
 
@@ -50,13 +51,6 @@ def _hog_installed() -> None:
 
 PERSON_ID = 7
 PERSON_HEIGHT_M = 1.75
-
-
-def _iou(a: Box, b: Box) -> float:
-    w = max(min(a[2], b[2]) - max(a[0], b[0]), 0.0)
-    h = max(min(a[3], b[3]) - max(a[1], b[1]), 0.0)
-    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - w * h
-    return w * h / union
 
 
 @cache
@@ -91,7 +85,7 @@ def test_a_standing_person_is_found_with_a_box_over_the_true_one(s_m: float, d_m
     # (about 0.3 as wide as tall): a box of the right height around the person overlaps at
     # most 2 w / h of it. The pyramid steps 5 % and the sample's shrinking is a rule of
     # thumb: a height up to 15 % off leaves (1 / 1.15)^2 of that.
-    assert _iou(box, truth) >= 2.0 * width / height / 1.15**2
+    assert iou(box, truth) >= 2.0 * width / height / 1.15**2
     assert abs((box[3] - box[1]) / height - 1.0) <= 0.15
     # the centre column on the windows' grid: 8 px stride in the 2x image is 4 px here
     assert abs((box[0] + box[2]) / 2 - (truth[0] + truth[2]) / 2) <= 4.0
@@ -125,7 +119,7 @@ def test_only_the_given_rows_are_searched_and_boxes_stay_in_image_rows() -> None
     assert result.rows_px == around
     assert len(result.boxes_px) == 1
     width, height = truth[2] - truth[0], truth[3] - truth[1]
-    assert _iou(result.boxes_px[0], truth) >= 2.0 * width / height / 1.15**2
+    assert iou(result.boxes_px[0], truth) >= 2.0 * width / height / 1.15**2
 
 
 @requires_hog
