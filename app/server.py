@@ -229,8 +229,10 @@ class InspectorServer:
         self._switch(session, lambda client: self._open_inspector(client, session.link()))
 
     def _switch(self, session: Session, open_view: Callable[[viser.ClientHandle], None]) -> None:
-        session.close()
         client = session.client
+        with self._lock:  # no frame reaches the old view while the page is emptied
+            self._sessions.pop(client.client_id, None)
+        session.close()
         client.gui.reset()
         client.scene.reset()
         open_view(client)

@@ -24,7 +24,7 @@ from browser_page import (
     serving,
     set_field,
 )
-from playwright.sync_api import Browser, Locator, Page
+from playwright.sync_api import Browser, Locator, Page, expect
 from playwright.sync_api import Error as PlaywrightError
 from test_browser_tuning import XI, open_folders
 
@@ -62,7 +62,13 @@ def playing_pixels(camera: Locator, wait_ms: int = 150) -> str:
 def no_controls(page: Page) -> None:
     """The page shows no input of any kind (viser keeps hidden ones for its own settings)
     and has no parameter, layer, annotation or timeline folder."""
-    assert page.locator("input:visible").count() == 0
+    visible = page.locator("input:visible")
+    with contextlib.suppress(AssertionError):  # the inspector's page is emptied, then refilled
+        expect(visible).to_have_count(0, timeout=TIMEOUT_MS)
+    described = visible.evaluate_all(
+        "inputs => inputs.map(i => [i.type, i.getAttribute('aria-label'), i.value])"
+    )
+    assert described == []
     for folder in ("Parameters", "Layers", "Annotation", "Timeline"):
         assert page.get_by_text(folder, exact=True).count() == 0, folder
 
