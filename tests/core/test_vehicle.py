@@ -26,7 +26,7 @@ from core.symmetry import (
     symmetry_matrix,
 )
 from core.synth.scene import Trajectory, Vehicle
-from core.vehicle import detect_vehicles, merge_boxes, world_size_ok
+from core.vehicle import border_top, detect_vehicles, merge_boxes, world_size_ok
 
 PARAMS = VehicleParams()
 RADAR_X_M = 3.6  # the synthetic radar's mount, ahead of the rear axle
@@ -355,6 +355,20 @@ def test_the_top_rises_to_where_the_vehicles_sides_end(
     off = dataclasses.replace(PARAMS, top_search_ratio=0.0)
     (papers,) = detect_vehicles(areas, radar, cam, off, image=image).vehicles
     assert papers.box_px == fixed.box_px
+
+
+def test_the_top_rises_past_a_base_without_sides() -> None:
+    """Step 11 from step 7's top: a trailer's bright rear (rows 60-169) above a dark
+    underride whose sides show no edge for 30 rows, more than the gap allows; the top is
+    the rear's, whatever the base below."""
+    image = np.full((240, 320), 40, np.uint8)  # a dark road and underride
+    image[:170] = 90  # the sky
+    image[60:170, 100:200] = 200  # the trailer's rear
+    box = (99.5, 150.5, 199.5, 199.5)  # step 7: the underride and the rear's lowest rows
+    assert PARAMS.top_gap_ratio * 100 < 30
+    assert border_top(image, box, PARAMS) == pytest.approx(59.5, abs=1)  # Sobel: 3 rows
+    off = dataclasses.replace(PARAMS, top_search_ratio=0.0)
+    assert border_top(image, box, off) == box[1]
 
 
 def test_radar_point_beside_the_car_finds_nothing(
