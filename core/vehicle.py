@@ -383,17 +383,20 @@ def border_top(image: U8Array, box: Box, params: VehicleParams) -> float:
     highest = max(math.ceil(v1 + 0.5 - params.top_search_ratio * width), 0)
     if params.top_search_ratio == 0 or c0 < 0 or c1 > w_img or bottom - highest < 3:
         return v0
-    crop = image[highest - (highest > 0) : bottom + (bottom < h_img), c0:c1]
+    # the rows searched: from step 7's top up (those below it are the symmetric region's)
+    stop = min(max(math.floor(v0 + 0.5), highest), bottom)
+    if stop == highest:
+        return v0
+    crop = image[highest - (highest > 0) : stop + (stop < h_img), c0:c1]
     dx = np.abs(np.asarray(cv2.Sobel(crop, cv2.CV_16S, 1, 0, ksize=3)))
-    strong = dx[(highest > 0) : (highest > 0) + bottom - highest] > params.edge_threshold
+    strong = dx[(highest > 0) : (highest > 0) + stop - highest] > params.edge_threshold
     k = BORDER_TOLERANCE_PX
     both: list[bool] = np.logical_and(
         strong[:, 1 : 2 * k + 2].any(axis=1), strong[:, -2 * k - 2 : -1].any(axis=1)
     ).tolist()
     gap_max = max(2, round(params.top_gap_ratio * width))
     top, gap = None, 0
-    start = min(len(both), max(math.floor(v0 + 0.5) - highest, 0))  # step 7's top row
-    for r in range(start - 1, -1, -1):
+    for r in range(len(both) - 1, -1, -1):
         if both[r]:
             top, gap = r, 0
         else:
