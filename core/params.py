@@ -467,6 +467,11 @@ class TrackingParams:
     # gate on the squared Mahalanobis distance of the position innovation (chosen: the 99 %
     # quantile of a chi-square with 2 degrees of freedom)
     gate_chi2: float = 9.21
+    # association cost of a gated pair: nu^T S^-1 nu + ln det S, the negative log-likelihood
+    # of the innovation, instead of nu^T S^-1 nu alone (chosen; false: the Mahalanobis
+    # distance alone, which lets a newborn track, whose speed is unknown and S large, take a
+    # confirmed track's detection; README, "Tracker association")
+    likelihood_cost: bool = True
     # white-acceleration spectral density of the constant-velocity model, per kind (chosen;
     # guard rails are static ground points, so almost none)
     vehicle_accel_psd_m2ps3: float = 4.0

@@ -24,7 +24,11 @@ filter (a random walk).
 3. association, per kind only: innovation nu = z - p, S = P_pos + R; a pair is allowed when
    nu^T S^-1 nu <= `gate_chi2` and |nu| <= `gate_m` (a hard cap in metres, whatever the
    covariance). Among the allowed pairs the assignment with the most pairs, then the least sum
-   of nu^T S^-1 nu, is taken (`solve_assignment`, Hungarian method).
+   of costs, is taken (`solve_assignment`, Hungarian method). A pair's cost is
+   nu^T S^-1 nu + ln det S, twice the innovation's negative log-likelihood less a constant
+   (`likelihood_cost`; without it nu^T S^-1 nu alone): an uncertain track, a newborn one
+   whose speed is unknown, pays for its large S and does not take the detection a confirmed
+   track predicted well.
 4. update, Kalman with z = (x_m, y_m), Joseph form. Measurement sigmas per kind: vehicles
    radar distance `radar_sigma_x_m` and vision lateral `vision_sigma_y_m`; pedestrians
    distance from the foot row `pedestrian_sigma_x_fraction` * x (at least
@@ -389,16 +393,17 @@ class _TrackState:
     def gated_cost(
         self, z_x: float, z_y: float, r: tuple[float, float], params: TrackingParams
     ) -> float:
-        """Step 3: nu^T S^-1 nu, or inf outside the gates; r: the diagonal of R."""
+        """Step 3: the cost of taking z, or inf outside the gates; r: the diagonal of R."""
         nu_x, nu_y = z_x - self.x, z_y - self.y
         if math.hypot(nu_x, nu_y) > params.gate_m:
             return math.inf
         p00, p01, _, _, p11 = self.P[:5]
         s00, s01, s11 = p00 + r[0], p01, p11 + r[1]
-        d2 = (s11 * nu_x * nu_x - 2.0 * s01 * nu_x * nu_y + s00 * nu_y * nu_y) / (
-            s00 * s11 - s01 * s01
-        )
-        return math.inf if d2 > params.gate_chi2 else d2
+        det = s00 * s11 - s01 * s01
+        d2 = (s11 * nu_x * nu_x - 2.0 * s01 * nu_x * nu_y + s00 * nu_y * nu_y) / det
+        if d2 > params.gate_chi2:
+            return math.inf
+        return d2 + math.log(det) if params.likelihood_cost else d2
 
     def correct(
         self, m: Measurement, z: tuple[float, float], r: tuple[float, float], params: TrackingParams

@@ -291,6 +291,25 @@ def test_kinds_never_associate_with_each_other() -> None:
     assert confirmed_sources(result, "vehicle") == frozenset()
 
 
+@pytest.mark.parametrize("likelihood_cost", [True, False])
+def test_a_newborn_duplicate_does_not_take_the_confirmed_tracks_detection(
+    likelihood_cost: bool,
+) -> None:
+    # A car at 20 m is tracked; one frame adds a second detection of it 2 m too far (a second
+    # radar point), which starts a track whose speed is unknown. The next frame's single
+    # detection at 20.9 m lies 0.9 m from the confirmed track, whose S is small
+    # (nu^T S^-1 nu ~ 6), and 1.1 m from the newborn, whose S is large (~ 0.5): by the
+    # Mahalanobis distance alone the newborn takes it, by the likelihood the confirmed track.
+    params = dataclasses.replace(P, likelihood_cost=likelihood_cost)
+    tracker = Tracker(params)
+    for _ in range(5):
+        tracker.update([_m(20.0, 0.0)], STILL, DT_S)
+    tracker.update([_m(20.0, 0.0), _m(22.0, 0.0, index=1)], STILL, DT_S)
+    result = tracker.update([_m(20.9, 0.0)], STILL, DT_S)
+    taker = _by_source(result)[0]
+    assert taker.id == (1 if likelihood_cost else 2)
+
+
 def test_the_gate_cap_in_metres_splits_far_detections() -> None:
     tracker = Tracker(P)
     tracker.update([_m(20.0, 0.0)], STILL, DT_S)
