@@ -191,8 +191,11 @@ class VehicleParams:
     # chi stays below the threshold for windows narrower than this (paper 001: "low for
     # narrow area widths"): poles, posts and gaps are not vehicles
     narrow_width_m: float = 0.4
-    # share of a box's columns with a shadow-to-road edge for its bottom (paper: "shadow")
-    bottom_edge_fraction: float = 0.5
+    # share of a box's columns with a shadow-to-road edge for its bottom (paper: "shadow";
+    # no figure). A vehicle's shadow and wheels end on the road across its whole width; at
+    # 0.5 (the papers' preset) rail posts, clutter and parts of vehicles passed too
+    # (core/vehicle.py Notes, step 7)
+    bottom_edge_fraction: float = 0.8
     # share of a box's columns with a horizontal edge for its top
     top_edge_fraction: float = 0.5
     min_height_ratio: float = 0.5  # a top lies at least this x width above the bottom
