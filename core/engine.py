@@ -185,7 +185,10 @@ def replay_window(params: Params) -> int:
     """Frames a seek replays before the wanted one: long enough for motion stereo's
     background to forget the frames before it and for a track to be confirmed again."""
     forget = frames_to_forget(params.motion_stereo)
-    tracking = params.tracking.confirm_frames + params.tracking.max_missed_frames
+    t = params.tracking
+    # the longest confirmation: a miss kept between every two hits
+    confirming = t.confirm_frames + (t.confirm_frames - 1) * t.tentative_max_missed_frames
+    tracking = confirming + t.max_missed_frames
     return max(LONGEST_REPLAY_FRAMES if forget is None else forget, tracking)
 
 

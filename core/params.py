@@ -466,6 +466,10 @@ class TrackingParams:
     confirm_frames: int = 3
     # a confirmed track is kept through this many consecutive missed frames (chosen)
     max_missed_frames: int = 3
+    # a tentative track is kept through this many consecutive missed frames (chosen; the
+    # papers' preset 0: dropped at its first miss, so a vehicle detected every other frame
+    # was never confirmed; core/tracking.py, step 5)
+    tentative_max_missed_frames: int = 1
     # hard cap on the distance between a track's prediction and a detection it may take,
     # whatever the covariance (chosen: a 30 m/s car seen again 0.1 s after its birth, with
     # speed 0, is 3 m from its prediction; 2 m lost such tracks on the second frame)
@@ -522,6 +526,12 @@ class TrackingParams:
             "max_missed_frames",
             "an integer >= 0",
             self.max_missed_frames,
+        )
+        _check(
+            self.tentative_max_missed_frames >= 0,
+            "tentative_max_missed_frames",
+            "an integer >= 0",
+            self.tentative_max_missed_frames,
         )
         _positive(
             self,

@@ -37,8 +37,10 @@ filter (a random walk).
 5. lifecycle: an unmatched measurement starts a tentative track (its position and width
    measured, speed 0 with sigma `initial_velocity_sigma_mps`, id = the next integer). A track
    is confirmed once it has `confirm_frames` hits and stays confirmed. A tentative track is
-   dropped at its first miss, so a one-frame false positive is never confirmed; a confirmed
-   track is dropped at its (`max_missed_frames` + 1)-th consecutive miss. A pedestrian
+   dropped at its (`tentative_max_missed_frames` + 1)-th consecutive miss, so a one-frame
+   false positive is never confirmed, while a vehicle detected on two frames of three is;
+   a confirmed track is dropped at its (`max_missed_frames` + 1)-th consecutive miss. A
+   tentative track, not yet shown, keeps its last box through its misses. A pedestrian
    track whose speed over the ground |v| is surely above a person's,
        |v| - `pedestrian_speed_gate_sigmas` sigma_v > `pedestrian_max_speed_mps`,
    sigma_v = sqrt(v^T C v) / |v|, C the velocity block of P, is tentative from then on: a
@@ -59,6 +61,17 @@ Notes:
     - The association maximises the number of gated pairs before minimising the cost (what a
       cost matrix with large finite entries for the gated pairs gives); a track never takes a
       measurement of another kind.
+    - Step 5, the papers' preset drops a tentative track at its first miss
+      (`tentative_max_missed_frames` 0). Refined vehicles flicker (a box on one frame, none
+      on the next), and such a vehicle's track was born again and again, never confirmed:
+      on stop_and_go half the raw detections that fit their vehicle were taken by tentative
+      tracks. Kept through one miss, radar-seen MOTA, 0 -> 1, on drives of new seeds (20 s
+      each): seeds 404-606 highway 0.46 -> 0.49, exurban 0.41 -> 0.42, stop_and_go 0.20 ->
+      0.23; seeds 101-303 and 707-909 0.55 -> 0.57, 0.42 -> 0.44, 0.24 -> 0.27, tracked RD /
+      (RD + FN) up by 0.02-0.11 and above the raw detections' on stop_and_go, track FP per
+      frame +0.00-0.01; nuScenes the same. Two misses did about as well on the synthetic
+      drives and had, before the stricter vehicle bottoms, turned nuScenes' (2 Hz) MOTA
+      from 0.14 to 0.03.
     - `ego.dt_s` is not used: `dt_s` is the interval of the prediction (the engine passes the
       same interval to both).
 """
@@ -161,8 +174,8 @@ class Track:
 @dataclass(frozen=True)
 class TrackResult:
     """Every live track after an update (tentative and confirmed), ordered by id, and the ids
-    dropped by it (tentative tracks at their first miss, confirmed ones after more than
-    max_missed_frames misses), ascending."""
+    dropped by it (tentative tracks after more than tentative_max_missed_frames misses,
+    confirmed ones after more than max_missed_frames), ascending."""
 
     tracks: tuple[Track, ...]
     ended: tuple[int, ...]
@@ -618,7 +631,11 @@ class Tracker:
                 track.correct(measurements[j], zs[j], rs[j], p)
             else:
                 track.miss()
-                if not track.confirmed or track.misses > p.max_missed_frames:
+                if track.confirmed:
+                    allowed = p.max_missed_frames
+                else:
+                    allowed = 0 if track.too_fast else p.tentative_max_missed_frames
+                if track.misses > allowed:
                     ended.append(track.id)
                     continue
             if track.kind == "pedestrian" and track.surely_faster_than(

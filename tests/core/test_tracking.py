@@ -245,10 +245,29 @@ def test_a_one_frame_false_positive_is_never_confirmed_and_is_ended() -> None:
             fp = _by_source(result)[1]
             assert (fp.id, fp.confirmed) == (2, False)
             assert confirmed_sources(result, "vehicle") == frozenset({0})
-        if k == 5:
+        # kept, tentative, through tentative_max_missed_frames misses, then ended
+        if k == 5 + P.tentative_max_missed_frames:
             assert result.ended == (2,)
         assert [t.id for t in result.confirmed] == ([1] if k >= P.confirm_frames - 1 else [])
     assert [t.id for t in result.tracks] == [1]
+
+
+@pytest.mark.parametrize("tentative_max_missed_frames", [0, 1])
+def test_a_vehicle_seen_on_two_frames_of_three_is_confirmed_when_a_miss_is_kept(
+    tentative_max_missed_frames: int,
+) -> None:
+    params = dataclasses.replace(P, tentative_max_missed_frames=tentative_max_missed_frames)
+    tracker = Tracker(params)
+    seen = [k % 3 != 2 for k in range(9)]  # hit, hit, miss, hit, hit, miss, ...
+    results = [tracker.update([_m(20.0, 1.0)] if hit else [], STILL, DT_S) for hit in seen]
+    if tentative_max_missed_frames:
+        # one track: tentative after two hits, kept through the miss, confirmed at its third
+        assert [[t.id for t in r.tracks] for r in results] == [[1]] * 9
+        assert [bool(r.confirmed) for r in results] == [False] * 3 + [True] * 6
+    else:
+        # born again after every miss, never reaching three hits
+        assert all(not r.confirmed for r in results)
+        assert [r.ended for r in results if r.ended] == [(1,), (2,), (3,)]
 
 
 def test_two_pedestrians_crossing_keep_their_ids() -> None:
@@ -314,8 +333,7 @@ def test_the_gate_cap_in_metres_splits_far_detections() -> None:
     tracker = Tracker(P)
     tracker.update([_m(20.0, 0.0)], STILL, DT_S)
     result = tracker.update([_m(20.0 + P.gate_m + 0.1, 0.0)], STILL, DT_S)
-    assert result.ended == (1,)
-    assert [t.id for t in result.tracks] == [2]
+    assert [(t.id, t.misses) for t in result.tracks] == [(1, 1), (2, 0)]  # 1 missed it
 
 
 def test_a_fast_lead_car_is_kept_from_its_second_frame() -> None:
@@ -327,7 +345,7 @@ def test_a_fast_lead_car_is_kept_from_its_second_frame() -> None:
     assert [r.tracks[0].id for r in results] == [1] * 5
     (track,) = results[-1].tracks
     assert track.confirmed and track.vx_mps == pytest.approx(30.0, abs=3.0)
-    narrow = Tracker(dataclasses.replace(P, gate_m=2.0))
+    narrow = Tracker(dataclasses.replace(P, gate_m=2.0, tentative_max_missed_frames=0))
     narrow.update([_m(40.0, 0.0)], ego, DT_S)
     assert narrow.update([_m(40.0, 0.0)], ego, DT_S).ended == (1,)
 
@@ -558,6 +576,7 @@ def test_duplicate_source_index_and_unknown_kind_are_rejected() -> None:
     [
         ("confirm_frames", 0),
         ("max_missed_frames", -1),
+        ("tentative_max_missed_frames", -1),
         ("gate_m", 0.0),
         ("gate_chi2", math.nan),
         ("vehicle_accel_psd_m2ps3", -1.0),
