@@ -482,6 +482,12 @@ class _TrackState:
         self.too_fast = True
         self.confirmed = False
 
+    def misses_kept(self, params: TrackingParams) -> int:
+        """Step 5: the consecutive misses this track survives (none once not a person)."""
+        if self.confirmed:
+            return params.max_missed_frames
+        return 0 if self.too_fast else params.tentative_max_missed_frames
+
     def miss(self) -> None:
         self.misses += 1
         self.source_index = None
@@ -631,11 +637,7 @@ class Tracker:
                 track.correct(measurements[j], zs[j], rs[j], p)
             else:
                 track.miss()
-                if track.confirmed:
-                    allowed = p.max_missed_frames
-                else:
-                    allowed = 0 if track.too_fast else p.tentative_max_missed_frames
-                if track.misses > allowed:
+                if track.misses > track.misses_kept(p):
                     ended.append(track.id)
                     continue
             if track.kind == "pedestrian" and track.surely_faster_than(
