@@ -33,7 +33,7 @@ from app.view import CanSeries, FrameSource, FrameView, can_series, render_view
 from app.view_link import Clip, ViewLink, link_query, parse_link_query
 from app.worker import RenderWorker
 from core.annotation.store import AnnotationStore
-from core.engine import FusionEngine
+from core.engine import FrameResult, FusionEngine
 from core.evaluation.evaluate import RecordingReport, evaluate_recording
 from core.io import Drive
 from core.io.errors import RecordingError
@@ -141,6 +141,7 @@ class InspectorServer:
         for session in sessions:
             session.close()
         for entry in drives:
+            entry.engines.close()
             entry.worker.stop()
             entry.drive.close()
             if entry.annotations is not None:
@@ -292,6 +293,12 @@ class InspectorServer:
             drive = self._open_drive(resolve_recording(self.recordings_root, name))
             engines = ClientEngines(drive.camera)
 
+            # per client, the last view rendered and what it was made of: a settling view
+            # (`app.engines`) is rendered again until its tracks are from the start, and
+            # is neither drawn nor sent again while nothing changed
+            drawn: dict[int, tuple[ViewState, FrameResult, FrameResult | None, FrameView]] = {}
+            sent: dict[int, tuple[object, FrameView]] = {}  # the session it was sent to
+
             def render(client_id: int, state: ViewState) -> FrameView | Exception:
                 try:
                     index = state.frame
@@ -301,7 +308,12 @@ class InspectorServer:
                     if state.params_b is not None:
                         params_b = state.params_b
                         result_b = engines.result((client_id, b), drive, params_b, index, True)
-                    return render_view(drive, state, result, drive.frame(index), result_b)
+                    before = drawn.get(client_id)
+                    if before is not None and before[:3] == (state, result, result_b):
+                        return before[3]
+                    view = render_view(drive, state, result, drive.frame(index), result_b)
+                    drawn[client_id] = (state, result, result_b, view)
+                    return view
                 except RecordingError as err:  # a damaged frame: say so on the page
                     return err
                 except Exception as err:  # the page says so; the log keeps the traceback
@@ -311,6 +323,8 @@ class InspectorServer:
             def publish(client_id: int, state: ViewState, view: FrameView | Exception) -> None:
                 session = self._sessions.get(client_id)
                 if session is None:
+                    drawn.pop(client_id, None)
+                    sent.pop(client_id, None)
                     return
                 if isinstance(view, RecordingError):
                     session.show_frame_error(name, state.frame, "cannot be read", str(view))
@@ -318,10 +332,15 @@ class InspectorServer:
                     why = f"{type(view).__name__}: {view}"
                     session.show_frame_error(name, state.frame, "failed in the engine", why)
                 else:
-                    session.show_view(name, view)
+                    before = sent.get(client_id)
+                    if before is None or before[0] is not session or before[1] is not view:
+                        session.show_view(name, view)
+                    sent[client_id] = (session, view)
+                    return
+                sent.pop(client_id, None)
 
             def again(view: FrameView | Exception) -> bool:
-                return isinstance(view, FrameView) and view.preview
+                return isinstance(view, FrameView) and (view.preview or view.settling)
 
             worker = RenderWorker(
                 render, publish, name=f"render-{name}", again=again, again_after_s=EXACT_AFTER_S

@@ -73,15 +73,15 @@ def bird_eye_snapshot_html(
     `layers` says (`app.bird_eye.bird_eye_geometry`; by default a demo's, as a video's).
 
     Each frame is what the inspector shows when it plays the drive: an engine per set seeks
-    to `first_frame` (replaying up to `core.engine.replay_window` frames before it) and
-    plays on. progress(done, total) is called after each frame of the clip. ValueError
-    naming first_frame or last_frame when they are not frames of the drive in order;
+    to `first_frame` from the drive's start (`core.engine`, "From the start": the tracks and
+    their ids of a playback) and plays on. progress(done, total) is called after each frame
+    of the clip. ValueError naming first_frame or last_frame when they are not frames of the
+    drive in order;
     `core.io.errors.RecordingError` when a frame of the clip cannot be read.
     """
     check_clip(drive, first_frame, last_frame)
-    engines = [FusionEngine(params, drive.camera)]
-    if params_b is not None:
-        engines.append(FusionEngine(params_b, drive.camera))
+    sets = [params] + ([] if params_b is None else [params_b])
+    engines = [FusionEngine(p, drive.camera, catch_up_frames=None) for p in sets]
     total = last_frame - first_frame + 1
     server = viser.ViserServer(host=PRIVATE_HOST, port=ANY_FREE_PORT, verbose=False)
     try:

@@ -2,9 +2,9 @@
 (`app.video_frame`), as H.264 in MP4 (.mp4) or as an animated GIF (.gif).
 
 `export_video` runs the engine over the clip as the inspector plays it: one engine per
-parameter set seeks the clip's first frame (a fresh engine replays the
-`core.engine.replay_window` frames before it, as the inspector does when it opens a frame)
-and plays on from there, so each exported frame is what the inspector shows for it. The
+parameter set seeks the clip's first frame from the drive's start (`core.engine`, "From the
+start", as the inspector's seeks are once its milestones reach the frame) and plays on from
+there, so each exported frame, its track ids included, is what the inspector shows for it. The
 frames go to OUT + ".partial", renamed to OUT only when the last one is written: an
 interrupted or failed export leaves no half file under OUT.
 
@@ -83,7 +83,7 @@ class ExportSummary:
     included), the picture's (width, height) in px, the frame rate, the file's size, and the
     wall-clock and CPU time the export took (engine warm-up, engine, drawing and encoding;
     CPU: this process's, all threads), and of that the wall-clock time of its first frame
-    (the engine replays its window before it; the first engine of a process also loads
+    (the engine plays the drive from its start to it; the first engine of a process also loads
     its compiled numba code, about a second)."""
 
     path: Path
@@ -319,7 +319,8 @@ def export_video(
     layers = DEMO_LAYERS if layers is None else layers
     sets = [Params() if params is None else params] + ([] if params_b is None else [params_b])
     hashes = [params_hash(p) for p in sets]
-    engines = [FusionEngine(p, drive.camera) for p in sets]
+    # from the drive's start, as the inspector shows it: the tracks and ids of a playback
+    engines = [FusionEngine(p, drive.camera, catch_up_frames=None) for p in sets]
     width_px = None
     if fmt == "gif":
         width_px = gif_width_px or gif_default_width_px(drive.camera.intrinsics.width_px, len(sets))

@@ -100,9 +100,10 @@ class FrameView:
     comparing); the bird's-eye views
     as (geometry, ground texture) for A, and B beside it, when that panel is on; preview:
     a result in it is the engine's preview (`FusionEngine.preview`), to be replaced by the
-    exact one; annotation: when the tab annotates, the bare frame as RGB and what the
-    engine found on it under A, to seed annotations from; figures: A's headline figures
-    (`app.presenter_view`)."""
+    exact one; settling: a result in it is not from the start yet (`app.engines`): its track
+    ids will change when it is; annotation: when the tab annotates, the bare frame as RGB
+    and what the engine found on it under A, to seed annotations from; figures: A's headline
+    figures (`app.presenter_view`)."""
 
     frame: int
     image: draw.RgbImage
@@ -114,9 +115,11 @@ class FrameView:
     preview: bool = False
     annotation: tuple[draw.RgbImage, Seeds] | None = None
     figures: HeadlineFigures | None = None
+    settling: bool = False
 
 
 PREVIEW_NOTE = "preview: replaying under the new values"
+SETTLING_NOTE = "track ids settling: playing the drive from its start"
 
 
 def readout_text(
@@ -172,8 +175,11 @@ def render_view(
     t_s = seconds_from_start(drive, frame.t_ns)
     text = readout_text(state.frame, len(drive), t_s, frame.speed_mps, frame.yaw_rate_radps)
     preview = result.preview or (result_b is not None and result_b.preview)
+    settling = not preview and not (result.from_start and (result_b is None or result_b.from_start))
     if preview:
         text += f" | {PREVIEW_NOTE}"
+    elif settling:
+        text += f" | {SETTLING_NOTE}"
     picture = camera_picture(drive, state, result, frame)
     diff = ""
     if result_b is not None:
@@ -205,6 +211,7 @@ def render_view(
         preview,
         annotation,
         headline_figures(result),
+        settling,
     )
 
 

@@ -827,9 +827,10 @@ def _add_export_scene(sub: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "export-scene",
         help="save a clip's 3D bird's-eye scene as one HTML page that plays without a server",
         description=_paragraph(
-            "Run the fusion engine over the clip (as the inspector plays it: the frames "
-            "before --from are replayed first) and record its 3D bird's-eye view (the road "
-            "texture, radar targets, vehicles, tracks, the ego car) frame after frame, at the "
+            "Run the fusion engine over the clip (as the inspector plays it: the drive "
+            "is played from its start up to --from first) and record its 3D bird's-eye "
+            "view (the road texture, radar targets, vehicles, tracks, the ego car) frame "
+            "after frame, at the "
             "drive's own pace, in one self-contained HTML page: open it in a browser, no "
             "server and no network needed; it loops over the clip. With --ab, a second "
             "parameter set's view beside it, as the inspector compares them. The page is "
@@ -849,9 +850,10 @@ def _add_export_video(sub: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "export-video",
         help="render a clip with its overlays to an .mp4 video or an animated .gif",
         description=_paragraph(
-            "Run the fusion engine over the clip (as the inspector shows it: the frames "
-            "before --from are replayed first) and write every frame's camera picture with "
-            "the overlay layers chosen, over a banner: the recording, the time from the "
+            "Run the fusion engine over the clip (as the inspector shows it: the drive "
+            "is played from its start up to --from first) and write every frame's camera "
+            "picture with the overlay layers chosen, over a banner: the recording, the "
+            "time from the "
             "drive's first frame, the frame's index, the parameter set's hash, and what the "
             "colours mean. .mp4: H.264 at the drive's frame rate, plays in browsers while it "
             "loads; .gif: an animated GIF for slides, scaled down. With --ab, a second "

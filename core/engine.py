@@ -34,6 +34,17 @@ parameters: an engine never changes its parameters and serves one drive; `reset(
 every snapshot. The kept background, pitch histogram and previous frame are read-only and
 kept by reference; the tracks, which the tracker updates in place, are copied.
 
+From the start: a frame's result is from the start when the engine reached it by processing
+every frame from the drive's first (or from the frame after the last one that could not be
+read, where a playback starts again too) without a break. Such a result is the playback's,
+its tracks and their ids included, however the frame was reached (`FrameResult.from_start`);
+a replay's tracks are not. A seek takes the latest from-start state before the wanted frame
+it has (its own, a kept one, or a milestone) and plays on from it when that costs at most
+`catch_up_frames` frames (None: whatever it costs; the default 0 only when the frame follows
+it). Milestones (`Milestones`) are the from-start states of every few frames of a drive under
+one set of parameters, which the engines serving it share and fill as they process: played
+once from the start, every frame of a drive is at most `every` frames from one.
+
 Replay tolerance (what a seek reproduces of playing the drive from its start):
     - motion stereo's background forgets a frame after `frames_to_forget` frames up to half
       a grey level (`core.motion_stereo`); the window is at least that long, so the
@@ -49,6 +60,7 @@ Replay tolerance (what a seek reproduces of playing the drive from its start):
 
 from __future__ import annotations
 
+import threading
 import time
 from collections import OrderedDict
 from collections.abc import Callable
@@ -84,6 +96,10 @@ MS_PER_S = 1000.0
 # A background whose weights never forget (frames_to_forget None) is rebuilt from this many
 # frames on a seek.
 LONGEST_REPLAY_FRAMES = 200
+# Frames between two milestones: a seek from the nearest costs at most this many frames, less
+# than a replay's window (22 frames under the defaults). 86 KB a state (app.engines), so 9 MB
+# for a 20-minute drive at 10 Hz.
+MILESTONE_EVERY_FRAMES = 10
 
 T = TypeVar("T")
 
@@ -123,7 +139,9 @@ class FrameResult:
     the confirmed tracks of each kind; tracked_guard_rails: indices of this frame's radar
     targets labelled guard rail and associated with a confirmed guard-rail track;
     replayed: frames processed before this one to rebuild the state (0 when it followed
-    the previous frame); preview: made by `preview`, from the state other parameters left.
+    the previous frame); preview: made by `preview`, from the state other parameters left;
+    from_start: processed on from the drive's start (module docstring), so its tracks and
+    their ids are those of a playback from the first frame, however the frame was reached.
     """
 
     index: int
@@ -139,6 +157,7 @@ class FrameResult:
     timings: StageTimings
     replayed: int
     preview: bool = False
+    from_start: bool = False
 
     @property
     def tracked_vehicles(self) -> tuple[Track, ...]:
@@ -163,11 +182,13 @@ class Frames(Protocol):
 
 @dataclass(frozen=True)
 class _LastFrame:
-    """What the next frame reads of the previous one: its index (does it follow?) and its
-    time (the tracker's interval). Not the FrameInput: a kept state would hold its image."""
+    """What the next frame reads of the previous one: its index (does it follow?), its
+    time (the tracker's interval) and whether it was processed on from the drive's start.
+    Not the FrameInput: a kept state would hold its image."""
 
     index: int
     t_ns: int
+    from_start: bool
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,6 +211,42 @@ def replay_window(params: Params) -> int:
     confirming = t.confirm_frames + (t.confirm_frames - 1) * t.tentative_max_missed_frames
     tracking = confirming + t.max_missed_frames
     return max(LONGEST_REPLAY_FRAMES if forget is None else forget, tracking)
+
+
+class Milestones:
+    """The from-start states (module docstring) of one drive under one set of parameters at
+    every `every`-th frame, shared by the engines that serve the drive under them. Safe to
+    use from several threads. ValueError naming every when it is not an integer >= 1."""
+
+    def __init__(self, params: Params, every: int = MILESTONE_EVERY_FRAMES) -> None:
+        if isinstance(every, bool) or not isinstance(every, int) or every < 1:
+            raise ValueError(f"every: expected an integer >= 1, got {every!r}")
+        self.params = params
+        self.every = every
+        self._states: dict[int, EngineState] = {}
+        self._lock = threading.Lock()
+
+    def due(self, last: _LastFrame) -> bool:
+        """Is the state after frame `last` one to keep?"""
+        return last.from_start and last.index % self.every == 0
+
+    def add(self, state: EngineState) -> None:
+        """Keep `state` when it is due (others are ignored)."""
+        if self.due(state.last):
+            with self._lock:
+                self._states[state.last.index] = state
+
+    def latest_before(self, index: int) -> EngineState | None:
+        """The kept state of the latest frame before `index` (None when none is)."""
+        with self._lock:
+            j = max((j for j in self._states if j < index), default=None)
+            return None if j is None else self._states[j]
+
+    @property
+    def reach(self) -> int:
+        """The latest frame whose state is kept (-1 when none is)."""
+        with self._lock:
+            return max(self._states, default=-1)
 
 
 def _timed(run: Callable[[], T]) -> tuple[T, float]:
@@ -231,21 +288,43 @@ class FusionEngine:
 
     camera: the drive's calibrated camera (its pitch is the calibrated one; each frame's
     detected pitch replaces it for that frame). keep_states: how many frames' cross-frame
-    states to keep for `seek` (module docstring; 0, the default, keeps none). ValueError
-    naming keep_states when it is not an integer >= 0.
+    states to keep for `seek` (module docstring; 0, the default, keeps none). catch_up_frames:
+    how many frames a seek may process from the latest from-start state to give the wanted
+    frame's from-start result (None: any number, every seek is from the start; 0, the
+    default: only when it follows). milestones: where to keep and find the from-start states
+    of every few frames, shared with other engines (None: none). ValueError naming the
+    argument for a keep_states or catch_up_frames that is not an integer >= 0 and for
+    milestones of other parameters.
     """
 
-    def __init__(self, params: Params, camera: CameraModel, keep_states: int = 0) -> None:
-        if isinstance(keep_states, bool) or not isinstance(keep_states, int) or keep_states < 0:
-            raise ValueError(f"keep_states: expected an integer >= 0, got {keep_states!r}")
+    def __init__(
+        self,
+        params: Params,
+        camera: CameraModel,
+        keep_states: int = 0,
+        catch_up_frames: int | None = 0,
+        milestones: Milestones | None = None,
+    ) -> None:
+        for name, value in (("keep_states", keep_states), ("catch_up_frames", catch_up_frames)):
+            if value is None and name == "catch_up_frames":
+                continue
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                raise ValueError(f"{name}: expected an integer >= 0, got {value!r}")
+        if milestones is not None and milestones.params != params:
+            raise ValueError("milestones: expected those of the engine's parameters, got others")
         self.params = params
         self.camera = camera
         self.keep_states = keep_states
+        self.catch_up_frames = catch_up_frames
+        self.milestones = milestones
         self._motion_stereo = MotionStereo(params.motion_stereo)
         self._tracker = Tracker(params.tracking)
         self._pitch_memory: PitchMemory | None = None
         self._vehicle_boxes: tuple[Box, ...] = ()
         self._last: _LastFrame | None = None
+        # after a start over: is the next frame's result from the start (a frame that cannot
+        # be read within a from-start run breaks the drive as it breaks a playback)
+        self._next_from_start = False
         self._states: OrderedDict[int, EngineState] = OrderedDict()
 
     @property
@@ -264,24 +343,30 @@ class FusionEngine:
         self._start_over()
         self._states.clear()
 
-    def _start_over(self) -> None:
-        """Forget the cross-frame state (not the kept ones): a new start within the drive."""
+    def _start_over(self, from_start: bool = False) -> None:
+        """Forget the cross-frame state (not the kept ones): a new start within the drive,
+        the next frame from the start when `from_start` (after a break in a from-start run)."""
         self._motion_stereo.reset()
         self._tracker.reset()
         self._pitch_memory = None
         self._vehicle_boxes = ()
         self._last = None
+        self._next_from_start = from_start
 
-    def _keep(self, last: _LastFrame) -> None:
-        """Keep the state after frame `last`, the most recently used."""
-        self._states[last.index] = EngineState(
+    def _state(self, last: _LastFrame) -> EngineState:
+        return EngineState(
             self._motion_stereo.state(),
             self._tracker.state(),
             self._pitch_memory,
             self._vehicle_boxes,
             last,
         )
-        self._states.move_to_end(last.index)
+
+    def _keep(self, state: EngineState) -> None:
+        """Keep `state`, the most recently used."""
+        index = state.last.index
+        self._states[index] = state
+        self._states.move_to_end(index)
         while len(self._states) > self.keep_states:
             self._states.popitem(last=False)
 
@@ -306,23 +391,63 @@ class FusionEngine:
         """The latest frame j with index - window < j < index whose state is kept."""
         return max((j for j in self._states if index - window < j < index), default=None)
 
+    def _from_start_before(self, index: int) -> int:
+        """The latest frame before `index` whose from-start state the engine has, keeps or
+        finds among the milestones (-1 when none: the drive's start)."""
+        here = [self._last.index] if self._last is not None and self._last.from_start else []
+        kept = [j for j, s in self._states.items() if s.last.from_start]
+        milestone = None if self.milestones is None else self.milestones.latest_before(index)
+        found = here + kept + ([] if milestone is None else [milestone.last.index])
+        return max((j for j in found if j < index), default=-1)
+
+    def _next_is_from_start(self, index: int) -> bool:
+        """Would frame `index`, processed next, be from the start?"""
+        if self._last is None:
+            return index == 0 or self._next_from_start
+        return self._last.from_start and index == self._last.index + 1
+
+    def reaches_from_start(self, index: int) -> bool:
+        """Would a seek to frame `index` now give its from-start result?"""
+        start = self._from_start_before(index)
+        return self.catch_up_frames is None or index - start - 1 <= self.catch_up_frames
+
+    def _take_up_from_start(self, j: int) -> None:
+        """Take up the from-start state after frame j (`_from_start_before`)."""
+        if j < 0:
+            self._start_over()
+        elif self._last is not None and self._last.index == j and self._last.from_start:
+            pass  # play on
+        elif j in self._states and self._states[j].last.from_start:
+            self._restore(j)
+        else:  # a milestone (a state kept of j, if any, came from a replay)
+            assert self.milestones is not None
+            milestone = self.milestones.latest_before(j + 1)
+            assert milestone is not None and milestone.last.index == j
+            self._take_up(milestone)
+
     def seek(self, frames: Frames, index: int) -> FrameResult:
-        """The result of frame `index` of `frames`: after the frames in between from the
-        latest state kept of a frame j with index - replay_window < j < index (module
-        docstring); else processed next when it follows the last frame, and after the
-        frames in between when it lies ahead of the last frame within `replay_window` (as
-        playing on would); otherwise after a reset of the cross-frame state (the kept
-        states stay) and a replay of up to `replay_window` frames. A frame in between that
-        cannot be read (RecordingError) resets the state, as a gap in the drive would; the
-        wanted frame's own RecordingError passes through. `replayed` counts the frames
-        processed before `index`."""
+        """The result of frame `index` of `frames`: from the start when the latest from-start
+        state before it (the engine's, a kept one or a milestone; the drive's start when
+        none) lies at most `catch_up_frames` frames before it, after the frames in between;
+        else after the frames in between from the latest state kept of a frame j with
+        index - replay_window < j < index (module docstring); else processed next when it
+        follows the last frame, and after the frames in between when it lies ahead of the
+        last frame within `replay_window` (as playing on would); otherwise after a reset of
+        the cross-frame state (the kept states stay) and a replay of up to `replay_window`
+        frames. A frame in between that cannot be read (RecordingError) resets the state, as
+        a gap in the drive would; the wanted frame's own RecordingError passes through.
+        `replayed` counts the frames processed before `index`."""
         if not 0 <= index < len(frames):
             raise ValueError(f"index: expected a frame 0..{len(frames) - 1}, got {index}")
         window = replay_window(self.params)
         last = self.last_index
         wanted = frames.frame(index)
+        start = self._from_start_before(index)
         kept = self._nearest_kept(index, window)
-        if kept is not None:
+        if self.reaches_from_start(index):
+            self._take_up_from_start(start)
+            first = start + 1
+        elif kept is not None:
             self._restore(kept)
             first = kept + 1
         elif last is not None and last < index <= last + window:
@@ -334,7 +459,7 @@ class FusionEngine:
             try:
                 frame = frames.frame(i)
             except RecordingError:
-                self._start_over()
+                self._start_over(self._next_is_from_start(i))
                 continue
             self.process(frame)
         result = self.process(wanted)
@@ -359,7 +484,7 @@ class FusionEngine:
             )
         try:
             self._take_up(state)
-            return replace(self._process(frame), preview=True)
+            return replace(self._process(frame), preview=True, from_start=False)
         finally:
             self._start_over()
 
@@ -368,13 +493,22 @@ class FusionEngine:
         not follow the last one (its index is not the next) starts over without history
         (the kept states stay)."""
         result = self._process(frame)
-        if self.keep_states and self._last is not None:
-            self._keep(self._last)
+        last = self._last
+        assert last is not None
+        milestone = self.milestones is not None and self.milestones.due(last)
+        if self.keep_states or milestone:
+            state = self._state(last)
+            if self.keep_states:
+                self._keep(state)
+            if milestone:
+                assert self.milestones is not None
+                self.milestones.add(state)
         return result
 
     def _process(self, frame: FrameInput) -> FrameResult:
         if self._last is not None and frame.index != self._last.index + 1:
             self._start_over()
+        from_start = self._next_is_from_start(frame.index)
         p = self.params
         image = frame.image
         pitch, pitch_ms = _timed(
@@ -422,7 +556,7 @@ class FusionEngine:
         pitch.memory.row_histogram.flags.writeable = False
         self._pitch_memory = pitch.memory
         self._vehicle_boxes = boxes
-        self._last = _LastFrame(frame.index, frame.t_ns)
+        self._last = _LastFrame(frame.index, frame.t_ns, from_start)
         return FrameResult(
             index=frame.index,
             t_ns=frame.t_ns,
@@ -438,4 +572,5 @@ class FusionEngine:
                 pitch_ms, motion_ms, rails_ms, vehicle_ms, pedestrian_ms, tracking_ms
             ),
             replayed=0,
+            from_start=from_start,
         )

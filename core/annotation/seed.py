@@ -2,12 +2,13 @@
 stored as sparse keyframes.
 
 `engine_track` plays the recording's frames first..last through the engine (after the
-engine's own replay window before `first`, as a seek does) and follows the confirmed track
-of the kind asked for that overlaps the given box most on the given frame. Track ids are
-the engine's own and restart with every replay, so the track is found again by its box, not
-its id. Its box on each frame it has one (the box of its last associated detection) becomes
-a keyframe candidate; `core.annotation.model.simplify` keeps only those that linear
-interpolation cannot reproduce within the tolerance, and frames without a box become gaps.
+frames before `first`, from the recording's start: `core.engine`, "From the start", the
+tracks the inspector shows) and follows the confirmed track of the kind asked for that
+overlaps the given box most on the given frame. The track is found by its box, not its id:
+the box is what the annotator drew. Its box on each frame it has one (the box of its last
+associated detection) becomes a keyframe candidate; `core.annotation.model.simplify` keeps
+only those that linear interpolation cannot reproduce within the tolerance, and frames
+without a box become gaps.
 """
 
 from __future__ import annotations
@@ -53,7 +54,8 @@ def engine_track(
                 f"first, frame, last: expected 0 <= first <= frame <= last <= "
                 f"{len(drive) - 1}, got {first}, {frame}, {last}"
             )
-        engine = FusionEngine(params, drive.camera)
+        # from the drive's start: the tracks, and their ids, the inspector shows
+        engine = FusionEngine(params, drive.camera, catch_up_frames=None)
         boxes: dict[int, dict[int, Box]] = {}
         for i in range(first, last + 1):
             result = engine.seek(drive, i)

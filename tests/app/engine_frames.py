@@ -19,9 +19,10 @@ FRAME = 90
 
 @functools.cache
 def engine_result(drive: str = DRIVE, index: int = FRAME) -> FrameResult:
-    """`FusionEngine.seek` of frame `index` of the bundled drive `drive`."""
+    """Frame `index` of the bundled drive `drive` from the start (`core.engine`): what the
+    inspector shows, and exports."""
     with Drive(DEFAULT_RECORDINGS / drive) as d:
-        return FusionEngine(Params(), d.camera).seek(d, index)
+        return FusionEngine(Params(), d.camera, catch_up_frames=None).seek(d, index)
 
 
 @functools.cache

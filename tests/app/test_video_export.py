@@ -124,7 +124,7 @@ def test_vehicle_boxes_are_drawn_where_the_engines_result_puts_them(
     mp4: ExportSummary,
 ) -> None:
     frames, _ = _decode(mp4.path)
-    result = engine_result("highway", FRAME)  # a fresh engine's: what the inspector shows
+    result = engine_result("highway", FRAME)  # what the inspector shows
     assert result.vehicle.vehicles, "frame 90 of the highway has vehicles"
     for vehicle in result.vehicle.vehicles:
         box = overlays.box_pixels(vehicle.box_px)

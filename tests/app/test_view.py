@@ -3,6 +3,8 @@ engine's result on it."""
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 from app_fakes import HEIGHT_PX, FakeDrive
@@ -14,6 +16,7 @@ from app.view import (
     AB_GAP_COLOUR,
     AB_GAP_PX,
     OVERLAY_OF_LAYER,
+    SETTLING_NOTE,
     STAGE_GAP_PX,
     STAGE_TITLES,
     FrameView,
@@ -26,7 +29,7 @@ from app.view import (
     stage_under,
     timings_markdown,
 )
-from core.engine import StageTimings
+from core.engine import FusionEngine, StageTimings, replay_window
 from core.params import Params
 
 
@@ -84,19 +87,21 @@ def test_a_result_of_another_frame_is_refused() -> None:
 
 def test_an_engine_per_client_and_the_last_result_again_for_a_redraw() -> None:
     drive = FakeDrive(frames=10)
-    engines = ClientEngines(drive.camera)
+    engines = ClientEngines(drive.camera, fill=False)
     first = engines.result("a", drive, Params(), 5)
     assert engines.result("a", drive, Params(), 5) is first  # a layer toggled: no rerun
     assert engines.result("a", drive, Params(), 6).replayed == 0  # the next frame
-    assert engines.result("b", drive, Params(), 6).replayed == 6  # b's own engine: a seek
+    # b's own engine: a seek, from the milestone a's engine left after frame 0
+    assert engines.result("b", drive, Params(), 6).replayed == 5
     changed = Params().with_value("pitch.lines_kept", 3)
     again = engines.result("a", drive, changed, 6)
-    assert again.replayed == 6 and again is not first  # new parameters: replayed
+    assert again.replayed == 6 and again is not first  # new parameters: from the start
+    assert again.from_start
 
 
 def test_new_parameters_give_a_preview_then_the_exact_replay() -> None:
     drive = FakeDrive(frames=10)
-    engines = ClientEngines(drive.camera)
+    engines = ClientEngines(drive.camera, fill=False)
     engines.result("a", drive, Params(), 6)
     changed = Params().with_value("pitch.lines_kept", 3)
     preview = engines.result("a", drive, changed, 6, preview=True)
@@ -113,12 +118,38 @@ def test_new_parameters_give_a_preview_then_the_exact_replay() -> None:
 
 def test_a_scrub_back_takes_up_the_state_the_engine_kept() -> None:
     drive = FakeDrive(frames=10)
-    engines = ClientEngines(drive.camera)
+    engines = ClientEngines(drive.camera, fill=False)
     assert engines.result("a", drive, Params(), 6).replayed == 6  # 0..5 on the way, kept
     assert engines.result("a", drive, Params(), 3).replayed == 0  # from 2's state
-    plain = ClientEngines(drive.camera, keep_states=0)
+    plain = ClientEngines(drive.camera, keep_states=0, fill=False)
     plain.result("a", drive, Params(), 6)
-    assert plain.result("a", drive, Params(), 3).replayed == 3  # a replay
+    assert plain.result("a", drive, Params(), 3).replayed == 2  # from frame 0's milestone
+
+
+def test_a_far_frame_is_a_settling_replay_until_the_filler_reaches_it() -> None:
+    drive = FakeDrive(frames=120)
+    quiet = ClientEngines(drive.camera, catch_up_frames=10, fill=False)
+    far = quiet.result("a", drive, Params(), 100)
+    assert not far.from_start and far.replayed == replay_window(Params())
+    assert quiet.result("a", drive, Params(), 100) is far  # nothing reaches it: kept
+    view = render_view(drive, ViewState(frame=100), far, drive.frame(100))
+    assert view.settling and SETTLING_NOTE in view.readout
+    filled = ClientEngines(drive.camera, catch_up_frames=10)
+    filled.result("a", drive, Params(), 100)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:  # the filler plays the drive from its start
+        exact = filled.result("a", drive, Params(), 100)
+        if exact.from_start:
+            break
+        time.sleep(0.05)
+    filled.close()
+    assert exact.from_start and exact.replayed <= 9  # from the milestone of frame 90 or 100
+    played = FusionEngine(Params(), drive.camera, catch_up_frames=None).seek(drive, 100)
+    assert [(t.id, t.x_m) for t in exact.tracking.tracks] == [
+        (t.id, t.x_m) for t in played.tracking.tracks
+    ]
+    view = render_view(drive, ViewState(frame=100), exact, drive.frame(100))
+    assert not view.settling and SETTLING_NOTE not in view.readout
 
 
 def test_only_the_stage_picture_shown_is_drawn_and_it_goes_under_the_camera() -> None:

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from core.cli import DEFAULT_RECORDINGS, main
-from core.engine import FrameResult, FusionEngine, replay_window
+from core.engine import FrameResult, FusionEngine, Milestones, replay_window
 from core.io.drive import Drive
 from core.io.errors import RecordingError
 from core.io.frame import FrameInput
@@ -284,6 +284,96 @@ def test_a_preview_runs_this_frame_on_the_state_other_parameters_kept() -> None:
         coarser = Params().with_value("motion_stereo.cell_m", 2 * Params().motion_stereo.cell_m)
         with pytest.raises(ValueError, match=r"state\.background"):  # another grid
             FusionEngine(coarser, drive.camera).preview(state, drive.frame(30))
+
+
+# --- from the start ---------------------------------------------------------------------
+
+
+def test_a_seek_from_the_start_gives_the_playbacks_tracks_and_ids_however_it_is_reached() -> None:
+    played = _playback(SEEK_DRIVE)
+    assert all(r.from_start for r in played)
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        engine = FusionEngine(Params(), drive.camera, catch_up_frames=None)
+        for i in (80, 30, 120, 31, 0, 149, 60):  # forwards, back, next, the ends
+            result = engine.seek(drive, i)
+            assert result.from_start
+            _assert_same(result, played[i])
+        assert any(t.id > 1 for t in played[120].tracked_vehicles)  # ids worth comparing
+        # a replay (the default engine, far from any from-start state) is not from the start
+        assert not FusionEngine(Params(), drive.camera).seek(drive, 80).from_start
+
+
+def test_engines_sharing_milestones_seek_from_the_nearest_within_their_catch_up() -> None:
+    played = _playback(SEEK_DRIVE)
+    window = replay_window(Params())
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        milestones = Milestones(Params(), every=10)
+        first = FusionEngine(Params(), drive.camera, milestones=milestones)
+        for i in range(61):  # a playback keeps the states of frames 0, 10, .. 60
+            first.seek(drive, i)
+        assert milestones.reach == 60
+        other = FusionEngine(Params(), drive.camera, catch_up_frames=15, milestones=milestones)
+        near = other.seek(drive, 57)  # from 50's milestone
+        assert near.from_start and near.replayed == 6
+        _assert_same(near, played[57])
+        reach = other.seek(drive, 76)  # 60's is 15 frames back
+        assert reach.from_start and reach.replayed == 15
+        _assert_same(reach, played[76])
+        assert milestones.reach == 70  # the engine kept 70's on the way
+        far = other.seek(drive, 120)  # beyond its catch-up: a replay
+        assert not far.from_start and far.replayed == window
+        assert milestones.reach == 70  # nothing from the start in a replay
+        # an engine keeping the states of a replay over frames 78..100 ...
+        keeper = FusionEngine(
+            Params(), drive.camera, keep_states=KEEP, catch_up_frames=15, milestones=milestones
+        )
+        assert not keeper.seek(drive, 100).from_start
+        filler = FusionEngine(Params(), drive.camera, catch_up_frames=None, milestones=milestones)
+        filler.seek(drive, 90)
+        assert milestones.reach == 90
+        # ... takes up 90's milestone, not its own state of 90 from the replay
+        exact = keeper.seek(drive, 100)
+        assert exact.from_start and exact.replayed == 9
+        _assert_same(exact, played[100])
+
+
+def test_a_from_start_seek_past_a_frame_that_cannot_be_read_starts_the_drive_again_after_it() -> (
+    None
+):
+    class Damaged:
+        def __init__(self, drive: Drive, bad: int) -> None:
+            self.drive, self.bad = drive, bad
+
+        def __len__(self) -> int:
+            return len(self.drive)
+
+        def frame(self, i: int) -> FrameInput:
+            if i == self.bad:
+                raise RecordingError(f"frame {i} is not a PNG")
+            return self.drive.frame(i)
+
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        engine = FusionEngine(Params(), drive.camera, catch_up_frames=None)
+        for bad in (0, 35):
+            engine.reset()
+            result = engine.seek(Damaged(drive, bad), 40)
+            clean = FusionEngine(Params(), drive.camera)
+            for i in range(bad + 1, 41):  # as a playback does: the drive starts again
+                expected = clean.process(drive.frame(i))
+            assert result.from_start and result.replayed == 40
+            _assert_same(result, expected)
+
+
+def test_bad_milestones_and_catch_up_are_refused_by_name() -> None:
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        with pytest.raises(ValueError, match="catch_up_frames: expected an integer >= 0"):
+            FusionEngine(Params(), drive.camera, catch_up_frames=-1)
+        other = Params().with_value("vehicle.min_width_m", 1.2)
+        with pytest.raises(ValueError, match="milestones: expected those of the engine's"):
+            FusionEngine(Params(), drive.camera, milestones=Milestones(other))
+    for every in (0, 2.5, True):
+        with pytest.raises(ValueError, match="every: expected an integer >= 1"):
+            Milestones(Params(), every=every)  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize("keep", [-1, 1.5, True])
