@@ -29,7 +29,9 @@ from app.view import (
     stage_under,
     timings_markdown,
 )
-from core.engine import FusionEngine, StageTimings, replay_window
+from core.cli import DEFAULT_RECORDINGS
+from core.engine import FrameResult, FusionEngine, StageTimings, replay_window
+from core.io.drive import Drive
 from core.params import Params
 
 
@@ -150,6 +152,32 @@ def test_a_far_frame_is_a_settling_replay_until_the_filler_reaches_it() -> None:
     ]
     view = render_view(drive, ViewState(frame=100), exact, drive.frame(100))
     assert not view.settling and SETTLING_NOTE not in view.readout
+
+
+def test_a_frame_shows_the_same_track_ids_however_a_client_reached_it() -> None:
+    def ids(result: FrameResult) -> list[tuple[str, int]]:
+        return [(t.kind, t.id) for t in (*result.tracked_vehicles, *result.tracked_pedestrians)]
+
+    with Drive(DEFAULT_RECORDINGS / "highway") as drive:
+        engines = ClientEngines(drive.camera, fill=False)
+        for i in range(121):  # tab a plays the drive to frame 120
+            played = engines.result("a", drive, Params(), i)
+        assert played.from_start and len(ids(played)) >= 2
+        # tab b opens frame 120, then scrubs back and forth
+        for i in (120, 40, 121, 120):
+            seeked = engines.result("b", drive, Params(), i)
+            assert seeked.from_start
+        assert ids(seeked) == ids(played)
+        # tab a changes a parameter (other tracks and ids), then takes it back
+        changed = Params().with_value("vehicle.min_width_m", 1.2)
+        assert engines.result("a", drive, changed, 120, preview=True).preview
+        # no milestones of these yet (no filler here): a replay, settling
+        assert not engines.result("a", drive, changed, 120, preview=True).from_start
+        assert engines.result("a", drive, Params(), 120, preview=True).preview
+        back = engines.result("a", drive, Params(), 120, preview=True)
+        assert back.from_start and ids(back) == ids(played)
+        # tab c comes after a switch to another recording (a new engine on this drive)
+        assert ids(engines.result("c", drive, Params(), 120)) == ids(played)
 
 
 def test_only_the_stage_picture_shown_is_drawn_and_it_goes_under_the_camera() -> None:
