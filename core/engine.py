@@ -249,6 +249,11 @@ class Milestones:
             return max(self._states, default=-1)
 
 
+def _check_count(name: str, value: object) -> None:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise ValueError(f"{name}: expected an integer >= 0, got {value!r}")
+
+
 def _timed(run: Callable[[], T]) -> tuple[T, float]:
     start = time.perf_counter()
     out = run()
@@ -305,11 +310,9 @@ class FusionEngine:
         catch_up_frames: int | None = 0,
         milestones: Milestones | None = None,
     ) -> None:
-        for name, value in (("keep_states", keep_states), ("catch_up_frames", catch_up_frames)):
-            if value is None and name == "catch_up_frames":
-                continue
-            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-                raise ValueError(f"{name}: expected an integer >= 0, got {value!r}")
+        _check_count("keep_states", keep_states)
+        if catch_up_frames is not None:
+            _check_count("catch_up_frames", catch_up_frames)
         if milestones is not None and milestones.params != params:
             raise ValueError("milestones: expected those of the engine's parameters, got others")
         self.params = params
