@@ -132,21 +132,24 @@ def test_a_seek_a_little_ahead_plays_the_frames_in_between() -> None:
         assert back.replayed == 10
 
 
+class _Damaged:
+    """A drive whose frame `bad` cannot be read."""
+
+    def __init__(self, drive: Drive, bad: int) -> None:
+        self.drive, self.bad = drive, bad
+
+    def __len__(self) -> int:
+        return len(self.drive)
+
+    def frame(self, i: int) -> FrameInput:
+        if i == self.bad:
+            raise RecordingError(f"frame {i} is not a PNG")
+        return self.drive.frame(i)
+
+
 def test_a_seek_past_a_frame_that_cannot_be_read_replays_from_after_it() -> None:
-    class Damaged:
-        def __init__(self, drive: Drive, bad: int) -> None:
-            self.drive, self.bad = drive, bad
-
-        def __len__(self) -> int:
-            return len(self.drive)
-
-        def frame(self, i: int) -> FrameInput:
-            if i == self.bad:
-                raise RecordingError(f"frame {i} is not a PNG")
-            return self.drive.frame(i)
-
     with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
-        damaged = Damaged(drive, 35)
+        damaged = _Damaged(drive, 35)
         engine = FusionEngine(Params(), drive.camera)
         result = engine.seek(damaged, 40)
         clean = FusionEngine(Params(), drive.camera)
@@ -340,23 +343,11 @@ def test_engines_sharing_milestones_seek_from_the_nearest_within_their_catch_up(
 def test_a_from_start_seek_past_a_frame_that_cannot_be_read_starts_the_drive_again_after_it() -> (
     None
 ):
-    class Damaged:
-        def __init__(self, drive: Drive, bad: int) -> None:
-            self.drive, self.bad = drive, bad
-
-        def __len__(self) -> int:
-            return len(self.drive)
-
-        def frame(self, i: int) -> FrameInput:
-            if i == self.bad:
-                raise RecordingError(f"frame {i} is not a PNG")
-            return self.drive.frame(i)
-
     with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
         engine = FusionEngine(Params(), drive.camera, catch_up_frames=None)
         for bad in (0, 35):
             engine.reset()
-            result = engine.seek(Damaged(drive, bad), 40)
+            result = engine.seek(_Damaged(drive, bad), 40)
             clean = FusionEngine(Params(), drive.camera)
             for i in range(bad + 1, 41):  # as a playback does: the drive starts again
                 expected = clean.process(drive.frame(i))
