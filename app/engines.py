@@ -6,8 +6,8 @@ layer toggled) costs nothing.
 
 Track ids (`core.engine`, "From the start"): the engines of one drive under one set of
 parameters share its milestones, and a filler thread plays the drive from its start under
-the parameters asked for last to fill them, so that within a second or so of a bundled drive
-(longer for a long one) every frame is at most `CATCH_UP_FRAMES` from one and shows the
+the parameters asked for last to fill them, so that within seconds of opening a bundled
+drive (longer for a long one) every frame is at most `CATCH_UP_FRAMES` from one and shows the
 playback's tracks and ids, however it was reached. Until then a far frame is a replay, whose
 ids differ (`FrameResult.from_start` False); `result` gives the from-start result once the
 milestones reach it.
