@@ -186,9 +186,10 @@ class ClientEngines:
             )
             try:
                 engine.seek(frames, index)
-            except RecordingError:  # this frame cannot be read: the next is from the start
+            except RecordingError:  # this frame cannot be read: the next milestone is the
+                # next step's, played on from the last one past it (from the start after it)
                 with self._lock:
-                    self._fill_from[milestones.params] = index + 1
+                    self._fill_from[milestones.params] = index + milestones.every
             except Exception:  # the filler must not end; the inspector shows replays
                 if not self._closed:  # (a drive closed under it when the server stops)
                     log.exception("filling the milestones up to frame %d failed", index)

@@ -32,6 +32,8 @@ from app.view import (
 from core.cli import DEFAULT_RECORDINGS
 from core.engine import FrameResult, FusionEngine, StageTimings, replay_window
 from core.io.drive import Drive
+from core.io.errors import RecordingError
+from core.io.frame import FrameInput
 from core.params import Params
 
 
@@ -152,6 +154,33 @@ def test_a_far_frame_is_a_settling_replay_until_the_filler_reaches_it() -> None:
     ]
     view = render_view(drive, ViewState(frame=100), exact, drive.frame(100))
     assert not view.settling and SETTLING_NOTE not in view.readout
+
+
+def test_the_filler_plays_past_a_frame_that_cannot_be_read() -> None:
+    class Damaged(FakeDrive):
+        def frame(self, index: int) -> FrameInput:
+            if index == 20:
+                raise RecordingError("frame 20: damaged PNG")
+            return super().frame(index)
+
+    drive = Damaged(frames=60)
+    engines = ClientEngines(drive.camera, catch_up_frames=5)
+    engines.result("a", drive, Params(), 0)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:  # the filler plays the drive from its start
+        result = engines.result("a", drive, Params(), 55)
+        if result.from_start:
+            break
+        time.sleep(0.05)
+    engines.close()
+    assert result.from_start and result.replayed == 4  # from the milestone of frame 50
+    # the drive starts again after the damaged frame, as a playback does
+    played = FusionEngine(Params(), drive.camera)
+    for i in range(21, 56):
+        expected = played.process(drive.frame(i))
+    assert [(t.id, t.x_m) for t in result.tracking.tracks] == [
+        (t.id, t.x_m) for t in expected.tracking.tracks
+    ]
 
 
 def test_a_frame_shows_the_same_track_ids_however_a_client_reached_it() -> None:
