@@ -394,14 +394,20 @@ class FusionEngine:
         """The latest frame j with index - window < j < index whose state is kept."""
         return max((j for j in self._states if index - window < j < index), default=None)
 
-    def _from_start_before(self, index: int) -> int:
-        """The latest frame before `index` whose from-start state the engine has, keeps or
-        finds among the milestones (-1 when none: the drive's start)."""
-        here = [self._last.index] if self._last is not None and self._last.from_start else []
-        kept = [j for j, s in self._states.items() if s.last.from_start]
+    def _from_start_before(self, index: int) -> tuple[int, EngineState | None]:
+        """The latest frame j before `index` whose from-start state the engine has (its own:
+        None), keeps or finds among the milestones, with that state; (-1, None) when none:
+        the drive's start."""
+        j, state = -1, None
+        if self._last is not None and self._last.from_start and self._last.index < index:
+            j = self._last.index
+        for k, kept in self._states.items():
+            if kept.last.from_start and j < k < index:
+                j, state = k, kept
         milestone = None if self.milestones is None else self.milestones.latest_before(index)
-        found = here + kept + ([] if milestone is None else [milestone.last.index])
-        return max((j for j in found if j < index), default=-1)
+        if milestone is not None and milestone.last.index > j:
+            j, state = milestone.last.index, milestone
+        return j, state
 
     def _next_is_from_start(self, index: int) -> bool:
         """Would frame `index`, processed next, be from the start?"""
@@ -409,24 +415,13 @@ class FusionEngine:
             return index == 0 or self._next_from_start
         return self._last.from_start and index == self._last.index + 1
 
-    def reaches_from_start(self, index: int) -> bool:
-        """Would a seek to frame `index` now give its from-start result?"""
-        start = self._from_start_before(index)
+    def _catches_up(self, index: int, start: int) -> bool:
+        """Is frame `index` within `catch_up_frames` of the from-start state after `start`?"""
         return self.catch_up_frames is None or index - start - 1 <= self.catch_up_frames
 
-    def _take_up_from_start(self, j: int) -> None:
-        """Take up the from-start state after frame j (`_from_start_before`)."""
-        if j < 0:
-            self._start_over()
-        elif self._last is not None and self._last.index == j and self._last.from_start:
-            pass  # play on
-        elif j in self._states and self._states[j].last.from_start:
-            self._restore(j)
-        else:  # a milestone (a state kept of j, if any, came from a replay)
-            assert self.milestones is not None
-            milestone = self.milestones.latest_before(j + 1)
-            assert milestone is not None and milestone.last.index == j
-            self._take_up(milestone)
+    def reaches_from_start(self, index: int) -> bool:
+        """Would a seek to frame `index` now give its from-start result?"""
+        return self._catches_up(index, self._from_start_before(index)[0])
 
     def seek(self, frames: Frames, index: int) -> FrameResult:
         """The result of frame `index` of `frames`: from the start when the latest from-start
@@ -445,10 +440,15 @@ class FusionEngine:
         window = replay_window(self.params)
         last = self.last_index
         wanted = frames.frame(index)
-        start = self._from_start_before(index)
+        start, state = self._from_start_before(index)
         kept = self._nearest_kept(index, window)
-        if self.reaches_from_start(index):
-            self._take_up_from_start(start)
+        if self._catches_up(index, start):
+            if start < 0:
+                self._start_over()
+            elif state is not None:  # else play on from the engine's own
+                self._take_up(state)
+                if self._states.get(start) is state:
+                    self._states.move_to_end(start)  # now the most recently used
             first = start + 1
         elif kept is not None:
             self._restore(kept)

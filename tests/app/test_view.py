@@ -130,6 +130,18 @@ def test_a_scrub_back_takes_up_the_state_the_engine_kept() -> None:
     assert plain.result("a", drive, Params(), 3).replayed == 2  # from frame 0's milestone
 
 
+def _once_from_start(engines: ClientEngines, drive: FakeDrive, index: int) -> FrameResult:
+    """Client "a"'s result of frame `index` once the filler has played the drive from its
+    start up to it (within a minute), the filler then stopped; the last result otherwise."""
+    deadline = time.monotonic() + 60
+    while True:
+        result = engines.result("a", drive, Params(), index)
+        if result.from_start or time.monotonic() > deadline:
+            engines.close()
+            return result
+        time.sleep(0.05)
+
+
 def test_a_far_frame_is_a_settling_replay_until_the_filler_reaches_it() -> None:
     drive = FakeDrive(frames=120)
     quiet = ClientEngines(drive.camera, catch_up_frames=10, fill=False)
@@ -140,13 +152,7 @@ def test_a_far_frame_is_a_settling_replay_until_the_filler_reaches_it() -> None:
     assert view.settling and SETTLING_NOTE in view.readout
     filled = ClientEngines(drive.camera, catch_up_frames=10)
     filled.result("a", drive, Params(), 100)
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline:  # the filler plays the drive from its start
-        exact = filled.result("a", drive, Params(), 100)
-        if exact.from_start:
-            break
-        time.sleep(0.05)
-    filled.close()
+    exact = _once_from_start(filled, drive, 100)
     assert exact.from_start and exact.replayed <= 9  # from the milestone of frame 90 or 100
     played = FusionEngine(Params(), drive.camera, catch_up_frames=None).seek(drive, 100)
     assert [(t.id, t.x_m) for t in exact.tracking.tracks] == [
@@ -166,13 +172,7 @@ def test_the_filler_plays_past_a_frame_that_cannot_be_read() -> None:
     drive = Damaged(frames=60)
     engines = ClientEngines(drive.camera, catch_up_frames=5)
     engines.result("a", drive, Params(), 0)
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline:  # the filler plays the drive from its start
-        result = engines.result("a", drive, Params(), 55)
-        if result.from_start:
-            break
-        time.sleep(0.05)
-    engines.close()
+    result = _once_from_start(engines, drive, 55)
     assert result.from_start and result.replayed == 4  # from the milestone of frame 50
     # the drive starts again after the damaged frame, as a playback does
     played = FusionEngine(Params(), drive.camera)
