@@ -6,14 +6,16 @@
 2. the camera model for this frame (the calibrated camera with the detected pitch);
 3. motion stereo (II-B) on the bird's-eye view, with the car's motion since the last frame;
 4. the search areas of the radar targets (wider where the tracker expects a vehicle it
-   follows, `Tracker.predicted`), and the guard-rail filter on the slow ones (paper 002);
+   follows, `Tracker.predicted`; a still target's centred on its point smoothed over the
+   last scans, `core.radar_smoothing`), and the guard-rail filter on the slow ones (paper 002);
 5. vehicle detection by symmetry on the others (II-C, paper 001);
 6. pedestrian detection with both fusion filters (II-D);
 7. tracking of vehicles, pedestrians and guard-rail targets (`core.tracking`, beyond the
    papers).
 
 The engine is the only module that knows this order. It owns what crosses frames: the pitch
-memory, the previous frame's vehicle boxes, motion stereo's background and the tracker.
+memory, the previous frame's vehicle boxes, the remembered radar points, motion stereo's
+background and the tracker.
 `process` expects frames in order; `seek(drive, index)` brings the engine to any frame of a
 drive: a frame a little ahead is reached by processing the frames in between (as playback
 skipping frames would), any other by resetting that state and replaying the
@@ -81,6 +83,7 @@ from core.motion_stereo import (
 from core.params import Params
 from core.pedestrian import PedestrianResult, detect_pedestrians
 from core.pitch import PitchMemory, PitchResult, detect_pitch
+from core.radar_smoothing import RememberedPoint, smooth_centres
 from core.search_area import SearchArea, search_areas
 from core.tracking import (
     Measurement,
@@ -199,6 +202,7 @@ class EngineState:
     tracker: TrackerState
     pitch_memory: PitchMemory | None
     vehicle_boxes: tuple[Box, ...]
+    radar_points: tuple[RememberedPoint, ...]
     last: _LastFrame
 
 
@@ -324,6 +328,7 @@ class FusionEngine:
         self._tracker = Tracker(params.tracking)
         self._pitch_memory: PitchMemory | None = None
         self._vehicle_boxes: tuple[Box, ...] = ()
+        self._radar_points: tuple[RememberedPoint, ...] = ()
         self._last: _LastFrame | None = None
         # after a start over: is the next frame's result from the start (a frame that cannot
         # be read within a from-start run breaks the drive as it breaks a playback)
@@ -353,6 +358,7 @@ class FusionEngine:
         self._tracker.reset()
         self._pitch_memory = None
         self._vehicle_boxes = ()
+        self._radar_points = ()
         self._last = None
         self._next_from_start = from_start
 
@@ -362,6 +368,7 @@ class FusionEngine:
             self._tracker.state(),
             self._pitch_memory,
             self._vehicle_boxes,
+            self._radar_points,
             last,
         )
 
@@ -388,6 +395,7 @@ class FusionEngine:
         self._tracker.restore(state.tracker)
         self._pitch_memory = state.pitch_memory
         self._vehicle_boxes = state.vehicle_boxes
+        self._radar_points = state.radar_points
         self._last = state.last
 
     def _nearest_kept(self, index: int, window: int) -> int | None:
@@ -531,7 +539,19 @@ class FusionEngine:
                 if p.vehicle.track_gate_m > 0
                 else []
             )
-            areas = search_areas(image, camera, frame.radar, p.vehicle, frame.speed_mps, tracked_m)
+            centres_y_m, self._radar_points = smooth_centres(
+                self._radar_points,
+                frame.radar,
+                ego,
+                frame.speed_mps,
+                dt_s,
+                p.vehicle.lateral_smoothing_s,
+                p.vehicle.lateral_smoothing_gate_m,
+                p.vehicle.moving_speed_mps,
+            )
+            areas = search_areas(
+                image, camera, frame.radar, p.vehicle, frame.speed_mps, tracked_m, centres_y_m
+            )
             return areas, detect_guard_rails(areas, frame.speed_mps, p.guardrail)
 
         (areas, rails), rails_ms = _timed(guard)

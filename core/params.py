@@ -179,6 +179,12 @@ class VehicleParams:
     # the tracker expects a confirmed vehicle track on this frame is that vehicle's, and gets
     # the moving targets' area however slow it is (0: off, the papers' preset)
     track_gate_m: float = 1.5
+    # beyond the papers (core/radar_smoothing.py): each area is centred on its radar point's
+    # lateral position averaged over about lateral_smoothing_s of scans, a point pairing with
+    # the last scans' within lateral_smoothing_gate_m across (the papers' preset: 0, every
+    # area on its own point)
+    lateral_smoothing_s: float = 0.2
+    lateral_smoothing_gate_m: float = 1.0
     search_height_ratio: float = 0.5  # paper 001: "area height is ... half of its width"
     # paper 001: bottom at 30% of area height below the radar point
     search_bottom_fraction: float = 0.3
@@ -242,6 +248,13 @@ class VehicleParams:
             "min_height_ratio",
             "narrow_width_m",
             "merge_max_gap_m",
+            "lateral_smoothing_gate_m",
+        )
+        _check(
+            math.isfinite(self.lateral_smoothing_s) and self.lateral_smoothing_s >= 0,
+            "lateral_smoothing_s",
+            "a time >= 0 (0: off)",
+            self.lateral_smoothing_s,
         )
         _check(
             math.isfinite(self.track_gate_m) and self.track_gate_m >= 0,

@@ -8,8 +8,9 @@ For a target at (x_m, y_m) in the vehicle frame:
 2. the area is `search_width_m` wide in the world at that distance (`moving_search_width_m`
    for a target moving over ground faster than `moving_speed_mps` or within `track_gate_m`
    of where the tracker expects a vehicle it follows, beyond the papers),
-   centred on the target: its left and right columns are the images of
-   (x_m, y_m +- W / 2, 0); its height is `search_height_ratio` of `search_width_m` (of its
+   centred on the target (a still target on its lateral position smoothed over the last
+   scans, beyond the papers: `core.radar_smoothing`): its left and right columns are the
+   images of (x_m, y_m +- W / 2, 0); its height is `search_height_ratio` of `search_width_m` (of its
    width, for the paper's areas), and its bottom lies `search_bottom_fraction` of its
    height below the radar point, so the vehicle stays inside under pitch error;
 3. only targets whose radar point lands inside the image get an area; an area crossing the
@@ -85,8 +86,9 @@ FloatArray = npt.NDArray[np.float64]
 class SearchArea:
     """The area of one radar target.
 
-    target_index: the target's place in the frame's radar tuple; base_px: (u, v) of the radar
-    point on the object's base; full_px: (u0, v0, u1, v1) pixel-edge bounds before cropping;
+    target_index: the target's place in the frame's radar tuple; base_px: (u, v) of the area's
+    centre on the object's base (the radar point, or its smoothed centre:
+    `core.radar_smoothing`); full_px: (u0, v0, u1, v1) pixel-edge bounds before cropping;
     box_px: (col0, row0, col1, row1) integer pixel bounds after cropping (end exclusive), so
     the crop is `image[row0:row1, col0:col1]`; y_left_m, y_right_m: the area's sides in the
     world (vehicle frame), at the target's x_m; patch: (h, w) uint8 grey, the crop resampled;
@@ -180,6 +182,7 @@ def search_areas(
     params: VehicleParams,
     ego_speed_mps: float = math.nan,
     tracked_m: Sequence[tuple[float, float]] = (),
+    centres_y_m: Sequence[float] | None = None,
 ) -> tuple[SearchArea, ...]:
     """The areas of the targets of `radar` whose base point lands inside `image`, in radar
     order.
@@ -187,18 +190,26 @@ def search_areas(
     image: (H, W) uint8 grey, the full camera frame; camera: the frame's camera model (with
     the detected pitch); ego_speed_mps: the car's speed, which tells moving targets (NaN,
     unknown: every area is `search_width_m` wide, unless tracked); tracked_m: (x_m, y_m)
-    where the tracker expects the vehicles it follows on this frame (`search_width_m`).
+    where the tracker expects the vehicles it follows on this frame (`search_width_m`);
+    centres_y_m: the lateral centre of each target's area (`core.radar_smoothing`; None:
+    its radar point's y_m, the paper's). ValueError when centres_y_m is not one per target.
     """
     camera.check_image(image)
     if not radar:
         return ()
     h_img, w_img = image.shape
+    if centres_y_m is None:
+        centres_y_m = [t.y_m for t in radar]
+    elif len(centres_y_m) != len(radar):
+        raise ValueError(
+            f"centres_y_m: expected one per radar target ({len(radar)}), got {len(centres_y_m)}"
+        )
     widths_m = [search_width_m(t, ego_speed_mps, params, tracked_m) for t in radar]
     pts = np.array(
         [
             (t.x_m, y, 0.0)
-            for t, w_m in zip(radar, widths_m, strict=True)
-            for y in (t.y_m, t.y_m + w_m / 2, t.y_m - w_m / 2)
+            for t, w_m, c in zip(radar, widths_m, centres_y_m, strict=True)
+            for y in (c, c + w_m / 2, c - w_m / 2)
         ]
     )
     uv, in_front = camera.project(pts)
@@ -238,8 +249,8 @@ def search_areas(
                 base_px=(u, v),
                 full_px=full,
                 box_px=(c0, r0, c1, r1),
-                y_left_m=t.y_m + widths_m[i] / 2,
-                y_right_m=t.y_m - widths_m[i] / 2,
+                y_left_m=centres_y_m[i] + widths_m[i] / 2,
+                y_right_m=centres_y_m[i] - widths_m[i] / 2,
                 patch=patch,
                 px_per_m=size[0] / (c1 - c0) * width_px / widths_m[i],
             )

@@ -253,7 +253,7 @@ def _search(area: SearchArea, params: VehicleParams) -> TargetResult:
     threshold = params.symmetry_threshold * h
     edges, chi, found, chosen = symmetry.search(
         area.patch,
-        area.to_patch_px(*area.base_px)[0],  # the radar point's column
+        area.to_patch_px(*area.base_px)[0],  # the area's centre column
         float(params.edge_threshold),
         params.max_half_width_px,
         threshold,

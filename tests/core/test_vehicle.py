@@ -73,6 +73,22 @@ def test_search_area_is_where_the_formulas_put_it() -> None:
     assert (area.y_left_m, area.y_right_m) == pytest.approx((2.25, -0.25))
 
 
+def test_a_search_area_centred_off_its_point_is_that_centre_s_area() -> None:
+    """centres_y_m (core.radar_smoothing) moves the area across: the same as a target at that
+    lateral position, the target itself kept."""
+    cam = flat_camera()
+    image = np.zeros((480, 640), dtype=np.uint8)
+    t = target(25.0, 1.0)
+    (area,) = search_areas(image, cam, (t,), PARAMS, centres_y_m=(0.4,))
+    (there,) = search_areas(image, cam, (target(25.0, 0.4),), PARAMS)
+    assert area.target is t
+    assert (area.y_left_m, area.y_right_m) == pytest.approx((1.65, -0.85))
+    assert area.full_px == pytest.approx(there.full_px)
+    assert area.base_px == pytest.approx(there.base_px)
+    with pytest.raises(ValueError, match="centres_y_m: expected one per radar target"):
+        search_areas(image, cam, (t,), PARAMS, centres_y_m=(0.4, 1.0))
+
+
 def test_a_target_moving_over_ground_gets_the_wider_area() -> None:
     cam = flat_camera()
     image = np.zeros((480, 640), dtype=np.uint8)
