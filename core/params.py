@@ -179,6 +179,9 @@ class VehicleParams:
     # the tracker expects a confirmed vehicle track on this frame is that vehicle's, and gets
     # the moving targets' area however slow it is (0: off, the papers' preset)
     track_gate_m: float = 1.5
+    # beyond the papers (core/search_area.py Notes): such a target's area is centred on the
+    # tracked vehicle's lateral position (vision's, filtered), not on the radar point
+    centre_on_track: bool = True
     # beyond the papers (core/radar_smoothing.py): each area is centred on its radar point's
     # lateral position averaged over about lateral_smoothing_s of scans, a point pairing with
     # the last scans' within lateral_smoothing_gate_m across (the papers' preset: 0, every

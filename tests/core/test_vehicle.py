@@ -138,6 +138,26 @@ def test_a_still_target_where_a_tracked_vehicle_is_expected_gets_the_wider_area(
     assert width([(25.0 + 0.9 * gate, 1.0)], off) == pytest.approx(2.5)
 
 
+def test_a_target_where_a_tracked_vehicle_is_expected_is_searched_about_that_vehicle() -> None:
+    """centre_on_track: the area is centred on the nearest tracked vehicle's lateral position
+    within the gate, whatever the smoothed centre says; off, on the centre given."""
+    cam = flat_camera()
+    image = np.zeros((480, 640), dtype=np.uint8)
+    t = target(25.0, 1.0)
+    gate = PARAMS.track_gate_m
+    tracked_m = [(25.0, 1.0 - 0.9 * gate), (25.0, 1.0 + 0.95 * gate), (40.0, 1.0)]
+
+    def centre(params: VehicleParams, tracked: list[tuple[float, float]]) -> float:
+        (a,) = search_areas(image, cam, (t,), params, 0.0, tracked, centres_y_m=(0.8,))
+        return (a.y_left_m + a.y_right_m) / 2
+
+    assert centre(PARAMS, tracked_m) == pytest.approx(1.0 - 0.9 * gate)
+    assert centre(PARAMS, tracked_m[2:]) == pytest.approx(0.8)  # none within the gate
+    assert centre(dataclasses.replace(PARAMS, centre_on_track=False), tracked_m) == pytest.approx(
+        0.8
+    )
+
+
 def test_far_areas_are_not_enlarged_and_border_areas_are_cropped() -> None:
     cam = flat_camera()
     image = np.zeros((480, 640), dtype=np.uint8)
