@@ -6,8 +6,9 @@
 2. the camera model for this frame (the calibrated camera with the detected pitch);
 3. motion stereo (II-B) on the bird's-eye view, with the car's motion since the last frame;
 4. the search areas of the radar targets (wider where the tracker expects a vehicle it
-   follows, `Tracker.predicted`; a still target's centred on its point smoothed over the
-   last scans, `core.radar_smoothing`), and the guard-rail filter on the slow ones (paper 002);
+   follows, `Tracker.predicted`, and centred on that vehicle; a still target's centred on
+   its point smoothed over the last scans, `core.radar_smoothing`), and the guard-rail
+   filter on the slow ones (paper 002);
 5. vehicle detection by symmetry on the others (II-C, paper 001);
 6. pedestrian detection with both fusion filters (II-D);
 7. tracking of vehicles, pedestrians and guard-rail targets (`core.tracking`, beyond the
