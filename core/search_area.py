@@ -185,16 +185,12 @@ def tracked_y_m(
 
 
 def search_width_m(
-    target: RadarTarget,
-    ego_speed_mps: float,
-    params: VehicleParams,
-    tracked_m: Sequence[tuple[float, float]] = (),
+    target: RadarTarget, ego_speed_mps: float, params: VehicleParams, tracked: bool
 ) -> float:
     """The world width of a target's area (step 2): `moving_search_width_m` when it moves over
-    ground faster than `moving_speed_mps` or lies within `track_gate_m` of a tracked
-    vehicle's expected position (x_m, y_m) in `tracked_m`, else `search_width_m`."""
+    ground faster than `moving_speed_mps` or is `tracked` (within `track_gate_m` of a tracked
+    vehicle's expected position, `tracked_y_m`), else `search_width_m`."""
     moving = abs(real_speed_mps(target, ego_speed_mps)) > params.moving_speed_mps
-    tracked = tracked_y_m(target, params, tracked_m) is not None
     return params.moving_search_width_m if moving or tracked else params.search_width_m
 
 
@@ -228,10 +224,13 @@ def search_areas(
         raise ValueError(
             f"centres_y_m: expected one per radar target ({len(radar)}), got {len(centres_y_m)}"
         )
-    if params.centre_on_track and tracked_m:
-        on_track = [tracked_y_m(t, params, tracked_m) for t in radar]
+    on_track = [tracked_y_m(t, params, tracked_m) for t in radar]
+    if params.centre_on_track:
         centres_y_m = [c if y is None else y for c, y in zip(centres_y_m, on_track, strict=True)]
-    widths_m = [search_width_m(t, ego_speed_mps, params, tracked_m) for t in radar]
+    widths_m = [
+        search_width_m(t, ego_speed_mps, params, y is not None)
+        for t, y in zip(radar, on_track, strict=True)
+    ]
     pts = np.array(
         [
             (t.x_m, y, 0.0)
