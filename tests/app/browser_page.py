@@ -21,7 +21,7 @@ from playwright.sync_api import Locator, Page
 
 from app.draw import STRIP_HEIGHT_PX
 from app.server import DriveOpener, InspectorServer, open_drive
-from app.view import PREVIEW_NOTE, STAGE_GAP_PX
+from app.view import PREVIEW_NOTE, SETTLING_NOTE, STAGE_GAP_PX
 from core.io.drive import Drive
 
 SCRIPTS = Path(__file__).resolve().parents[2] / "scripts"
@@ -135,14 +135,18 @@ def stage_top_px(drive_path: Path) -> int:
 def changed_pixels(page: Page, image: Locator, before: str, top_px: int = 0) -> str:
     """Wait until `image` shows other pixels than `before` (from row `top_px` down), the
     same on two reads 100 ms apart (a read while the page swaps pictures can catch one half
-    drawn), and the read-out does not call it a preview (after a parameter change the exact
-    picture replaces the preview once the value has rested, which can be well over 100 ms
-    later); its digest."""
-    preview = page.locator("code").filter(has_text=PREVIEW_NOTE)
+    drawn), and the read-out does not call it a preview or settling (after a parameter
+    change the exact picture replaces the preview once the value has rested, which can be
+    well over 100 ms later, and the from-start one replaces a settling replay); its digest."""
+    provisional = (
+        page.locator("code")
+        .filter(has_text=PREVIEW_NOTE)
+        .or_(page.locator("code").filter(has_text=SETTLING_NOTE))
+    )
     last = before
     for _ in range(TIMEOUT_MS // 100):
         now = pixels(image, top_px)
-        if now != before and now == last and preview.count() == 0:
+        if now != before and now == last and provisional.count() == 0:
             return now
         last = now
         page.wait_for_timeout(100)
