@@ -304,7 +304,9 @@ class VehicleParams:
 class GuardRailParams:
     """Guard-rail filter for slow radar objects and overlapping boxes (paper 002)."""
 
-    max_speed_mps: float = 5.0  # paper 002: "lower than 5 m/s"
+    # paper 002: "lower than 5 m/s"; a rail stands still, and cars crawling in a queue at
+    # 2-5 m/s were labelled guard rail (core/guardrail.py, Notes)
+    max_speed_mps: float = 1.5
     # |3x3 Sobel| (Euclidean, 4 per grey level of a step) above this is an edge. Paper 002:
     # "a very low threshold on module"; 40 (a 10-grey step) rather than 20 because at 20 the
     # road texture and lane-marking edges of the bundled stop_and_go drive carried a line
@@ -324,6 +326,9 @@ class GuardRailParams:
     # this high above the road, not along it (kerbs, lane edges, shadows, a parked car's
     # sill); the papers' preset: -100 (no test)
     min_line_height_m: float = 0.1
+    # beyond the paper: a slow target where the tracker expects a vehicle
+    # (SearchArea.tracked) is not checked; the papers' preset: False
+    skip_tracked_vehicles: bool = True
 
     def __post_init__(self) -> None:
         _positive(self, "max_speed_mps", "sobel_threshold")

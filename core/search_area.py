@@ -106,8 +106,9 @@ class SearchArea:
     box_px: (col0, row0, col1, row1) integer pixel bounds after cropping (end exclusive), so
     the crop is `image[row0:row1, col0:col1]`; y_left_m, y_right_m: the area's sides in the
     world (vehicle frame), at the target's x_m; patch: (h, w) uint8 grey, the crop resampled;
-    px_per_m: patch pixels per metre across at the target's distance. The patch is an array of
-    its own (C-contiguous, writable), never a view of the image.
+    px_per_m: patch pixels per metre across at the target's distance; tracked: the target lies
+    within `track_gate_m` of where a confirmed vehicle track is expected (`tracked_y_m`).
+    The patch is an array of its own (C-contiguous, writable), never a view of the image.
     """
 
     target_index: int
@@ -119,6 +120,7 @@ class SearchArea:
     y_right_m: float
     patch: npt.NDArray[np.uint8]
     px_per_m: float
+    tracked: bool = False
 
     @property
     def x_m(self) -> float:
@@ -279,6 +281,7 @@ def search_areas(
                 y_right_m=centres_y_m[i] - widths_m[i] / 2,
                 patch=patch,
                 px_per_m=size[0] / (c1 - c0) * width_px / widths_m[i],
+                tracked=on_track[i] is not None,
             )
         )
     return tuple(areas)

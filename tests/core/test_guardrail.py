@@ -434,6 +434,23 @@ def test_fast_targets_and_unknown_ego_speed_are_not_checked() -> None:
     assert detect_guard_rails((), 20.0, PARAMS).checks == ()
 
 
+def test_a_crawling_car_and_a_tracked_vehicle_are_not_checked() -> None:
+    """A rail stands still: a target crawling at 3 m/s over ground (a queue) is not checked
+    at 1.5 m/s, as it was at the paper's 5 m/s; a still target where the tracker expects a
+    vehicle is not checked, unless skip_tracked_vehicles is off (the papers')."""
+    rail = rail_patch(np.random.default_rng(5))
+    crawling = RadarTarget.from_polar(15.0, 0.0, -17.0, 0.0, 0.0, 0.0)  # 20 - 17 = 3 m/s
+    still = area_of(1, static_target(18.0, 4.0, 20.0), rail, col0=200)
+    tracked = dataclasses.replace(still, target_index=2, tracked=True)
+    areas = (area_of(0, crawling, rail, col0=2), still, tracked)
+    assert PARAMS.max_speed_mps == 1.5 and PARAMS.skip_tracked_vehicles
+    assert [c.target_index for c in detect_guard_rails(areas, 20.0, PARAMS).checks] == [1]
+    papers = dataclasses.replace(PARAMS, max_speed_mps=5.0, skip_tracked_vehicles=False)
+    checked = detect_guard_rails(areas, 20.0, papers).checks
+    assert sorted(c.target_index for c in checked) == [0, 1, 2]
+    assert [c.real_speed_mps for c in checked if c.target_index == 0] == [pytest.approx(3.0)]
+
+
 # --- bad input --------------------------------------------------------------------------------
 
 
