@@ -235,8 +235,18 @@ class VehicleParams:
     # beyond the papers: a vehicle is as far as its nearest target, the one nearest its near
     # face (the papers' preset: False, the mean of its targets)
     distance_of_nearest_target: bool = True
+    # beyond the papers (core/vehicle.py Notes): a target whose area has fewer image pixels
+    # per metre across than this is too far to be refined and is not searched (0: every
+    # target is, the papers' preset)
+    min_image_px_per_m: float = 10.0
 
     def __post_init__(self) -> None:
+        _check(
+            math.isfinite(self.min_image_px_per_m) and self.min_image_px_per_m >= 0,
+            "min_image_px_per_m",
+            "a resolution >= 0 (0: off)",
+            self.min_image_px_per_m,
+        )
         _positive(
             self,
             "search_width_m",

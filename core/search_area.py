@@ -128,6 +128,11 @@ class SearchArea:
         return self.target.x_m
 
     @property
+    def image_px_per_m(self) -> float:
+        """Image pixels per metre across at the target's distance, before resampling."""
+        return (self.full_px[2] - self.full_px[0]) / (self.y_left_m - self.y_right_m)
+
+    @property
     def cropped(self) -> bool:
         """True when part of the area lies outside the image."""
         return self.box_px != tuple(math.ceil(b) for b in self.full_px)

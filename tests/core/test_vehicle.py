@@ -428,6 +428,31 @@ def test_guard_rail_targets_are_not_searched(rendered_car: tuple[np.ndarray, np.
     assert result.targets[0].edges.shape == (0, 0)
 
 
+def test_an_area_with_too_few_pixels_per_metre_is_not_searched(
+    rendered_car: tuple[np.ndarray, np.ndarray],
+) -> None:
+    """The car 20 m ahead: its area's image pixels per metre are the focal length over its
+    distance from the camera; a threshold just above them leaves it unsearched ("too_far"),
+    one just below (or 0, the papers') searches and finds it."""
+    image, _ = rendered_car
+    cam = camera()
+    radar = (target(20.0, 1.2),)
+    (area,) = search_areas(image, cam, radar, PARAMS)
+    # the camera sits a little ahead of the vehicle frame's origin
+    fx = cam.intrinsics.fx_px
+    assert fx / area.x_m < area.image_px_per_m < fx / (area.x_m - 2.5)
+    for limit, verdict in (
+        (area.image_px_per_m * 1.01, "too_far"),
+        (area.image_px_per_m * 0.99, "vehicle"),
+        (0.0, "vehicle"),
+    ):
+        params = dataclasses.replace(PARAMS, min_image_px_per_m=limit)
+        result = detect_vehicles((area,), radar, cam, params)
+        assert result.targets[0].verdict == verdict
+        assert len(result.vehicles) == (verdict == "vehicle")
+    assert PARAMS.min_image_px_per_m == 10.0
+
+
 def test_two_radar_points_on_one_car_give_one_vehicle(
     rendered_car: tuple[np.ndarray, np.ndarray],
 ) -> None:
@@ -514,7 +539,12 @@ def test_boxes_of_targets_far_apart_in_distance_are_never_one_vehicle() -> None:
 
 
 def test_bad_parameters_name_the_field() -> None:
-    for field, value in (("edge_threshold", 0.0), ("bottom_edge_fraction", 1.5)):
+    for field, value in (
+        ("edge_threshold", 0.0),
+        ("bottom_edge_fraction", 1.5),
+        ("min_image_px_per_m", -1.0),
+        ("min_image_px_per_m", math.nan),
+    ):
         with pytest.raises(ParamsError, match=field):
             dataclasses.replace(PARAMS, **{field: value})
 
