@@ -64,7 +64,7 @@ SEARCH_AREA_COLOUR: Rgb = (225, 225, 225)  # near white
 # paper 002, engine's findings
 GUARD_RAIL_LINE_COLOUR: Rgb = (255, 0, 255)  # magenta: a followed line long enough
 SHORT_LINE_COLOUR: Rgb = (140, 0, 140)  # dark magenta: a followed line too short
-OVERLAP_COLOUR: Rgb = (255, 0, 255)  # hatching of areas labelled guard rail by overlap
+OVERLAP_COLOUR: Rgb = (255, 0, 255)  # hatching of areas labelled guard rail by overlap or line
 # paper 000 fig. 6-7
 PEDESTRIAN_COLOUR: Rgb = (0, 255, 0)  # bright green: kept
 PEDESTRIAN_REJECTED_COLOUR: Rgb = (0, 120, 0)  # dark green: rejected
@@ -228,7 +228,8 @@ def put_guard_rails(
 ) -> None:
     """In place: the lines the guard-rail filter followed, in image pixels: `GUARD_RAIL_LINE_COLOUR`
     (2 px) where they made a guard rail, `SHORT_LINE_COLOUR` (1 px) where too short; the
-    areas labelled guard rail by overlap management, hatched in `OVERLAP_COLOUR`.
+    areas labelled guard rail without a line of their own, by overlap management or along
+    a rail line (`core.rail_lines`), hatched in `OVERLAP_COLOUR`.
 
     checks: `GuardRailResult.checks`; areas: the frame's search areas (matched by
     target_index; a check without its area is skipped).
@@ -239,7 +240,7 @@ def put_guard_rails(
         area = by_target.get(check.target_index)
         if area is None:
             continue
-        if check.verdict == "overlap":
+        if check.verdict in ("overlap", "line"):
             _hatch(out, area.box_px, OVERLAP_COLOUR)
             continue
         if len(check.line_px) == 0:

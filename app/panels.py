@@ -366,7 +366,8 @@ def guard_rail_tile(
     """One checked slow target: its area's patch on the left, the edge image after morphology
     on the right (edges grey) with the followed line (magenta when a rail, dark magenta when
     too short), its start (green) and holes (red); an area labelled by overlap shows its
-    patch hatched. Captioned with the target, its distance, side, coverage and verdict.
+    patch hatched. Captioned with the target, its distance, side, coverage and verdict
+    ("along the rail line" for one labelled by `core.rail_lines` after its search).
 
     Shape: (tile_h + STRIP_HEIGHT_PX, tile_w, 3).
     """
@@ -391,9 +392,8 @@ def guard_rail_tile(
     _paint_cells(right, check.holes_px, s, HOLE_COLOUR)
     if check.start_px is not None:
         _paint_cells(right, check.line_px[:1], s, START_COLOUR)
-    caption = (
-        f"#{check.target_index} {area.x_m:.1f} m {check.side} {check.coverage:.0%} {check.verdict}"
-    )
+    verdict = "along the rail line" if check.verdict == "line" else check.verdict
+    caption = f"#{check.target_index} {area.x_m:.1f} m {check.side} {check.coverage:.0%} {verdict}"
     return _captioned_tile(out, caption, tile_hw_px)
 
 

@@ -55,6 +55,13 @@ class EgoMotion:
     def still(cls, dt_s: float = 0.0) -> EgoMotion:
         return cls(0.0, 0.0, 0.0, dt_s, 1)
 
+    def carry(self, x_m: float, y_m: float) -> tuple[float, float]:
+        """A point standing still in the world, from the vehicle frame at the first instant
+        into the one at the second: R(-dyaw) (p - (dx, dy))."""
+        cos, sin = math.cos(-self.dyaw_rad), math.sin(-self.dyaw_rad)
+        dx, dy = x_m - self.dx_m, y_m - self.dy_m
+        return cos * dx - sin * dy, sin * dx + cos * dy
+
 
 def chord_length_m(speed_mps: float, yaw_rate_radps: float, dt_s: float) -> float:
     """Eq. (5): S = 2 v / gamma * sin(gamma T / 2), written as v T sinc(gamma T / 2).

@@ -8,15 +8,16 @@
 4. the search areas of the radar targets (wider where the tracker expects a vehicle it
    follows, `Tracker.predicted`, and centred on that vehicle; a still target's centred on
    its point smoothed over the last scans, `core.radar_smoothing`), and the guard-rail
-   filter on the slow ones (paper 002);
+   filter on the slow ones (paper 002), with the lines of the rail returns it found over
+   the last seconds (`core.rail_lines`);
 5. vehicle detection by symmetry on the others (II-C, paper 001);
 6. pedestrian detection with both fusion filters (II-D);
 7. tracking of vehicles, pedestrians and guard-rail targets (`core.tracking`, beyond the
    papers).
 
 The engine is the only module that knows this order. It owns what crosses frames: the pitch
-memory, the previous frame's vehicle boxes, the remembered radar points, motion stereo's
-background and the tracker.
+memory, the previous frame's vehicle boxes, the remembered radar points and rail returns,
+motion stereo's background and the tracker.
 `process` expects frames in order; `seek(drive, index)` brings the engine to any frame of a
 drive: a frame a little ahead is reached by processing the frames in between (as playback
 skipping frames would), any other by resetting that state and replaying the
@@ -85,6 +86,7 @@ from core.params import Params
 from core.pedestrian import PedestrianResult, detect_pedestrians
 from core.pitch import PitchMemory, PitchResult, detect_pitch
 from core.radar_smoothing import RememberedPoint, smooth_centres
+from core.rail_lines import RailLine, RailReturn, along_rail_lines
 from core.search_area import SearchArea, search_areas
 from core.tracking import (
     Measurement,
@@ -138,7 +140,9 @@ class FrameResult:
     """Everything the engine found on one frame, with every stage's intermediates.
 
     camera: this frame's camera (calibration with the detected pitch); areas: the radar
-    targets' search areas; vehicle, pedestrian: the papers' per-frame detections;
+    targets' search areas; guardrail: the guard-rail labels (paper 002's and along the rail
+    lines, `core.rail_lines`); rail_lines: those lines; vehicle, pedestrian: the papers'
+    per-frame detections;
     tracking: every live track after this frame; tracked_vehicles / tracked_pedestrians:
     the confirmed tracks of each kind; tracked_guard_rails: indices of this frame's radar
     targets labelled guard rail and associated with a confirmed guard-rail track;
@@ -162,6 +166,7 @@ class FrameResult:
     replayed: int
     preview: bool = False
     from_start: bool = False
+    rail_lines: tuple[RailLine, ...] = ()
 
     @property
     def tracked_vehicles(self) -> tuple[Track, ...]:
@@ -204,6 +209,7 @@ class EngineState:
     pitch_memory: PitchMemory | None
     vehicle_boxes: tuple[Box, ...]
     radar_points: tuple[RememberedPoint, ...]
+    rail_returns: tuple[RailReturn, ...]
     last: _LastFrame
 
 
@@ -330,6 +336,7 @@ class FusionEngine:
         self._pitch_memory: PitchMemory | None = None
         self._vehicle_boxes: tuple[Box, ...] = ()
         self._radar_points: tuple[RememberedPoint, ...] = ()
+        self._rail_returns: tuple[RailReturn, ...] = ()
         self._last: _LastFrame | None = None
         # after a start over: is the next frame's result from the start (a frame that cannot
         # be read within a from-start run breaks the drive as it breaks a playback)
@@ -360,6 +367,7 @@ class FusionEngine:
         self._pitch_memory = None
         self._vehicle_boxes = ()
         self._radar_points = ()
+        self._rail_returns = ()
         self._last = None
         self._next_from_start = from_start
 
@@ -370,6 +378,7 @@ class FusionEngine:
             self._pitch_memory,
             self._vehicle_boxes,
             self._radar_points,
+            self._rail_returns,
             last,
         )
 
@@ -397,6 +406,7 @@ class FusionEngine:
         self._pitch_memory = state.pitch_memory
         self._vehicle_boxes = state.vehicle_boxes
         self._radar_points = state.radar_points
+        self._rail_returns = state.rail_returns
         self._last = state.last
 
     def _nearest_kept(self, index: int, window: int) -> int | None:
@@ -534,7 +544,7 @@ class FusionEngine:
 
         dt_s = 0.0 if self._last is None else max((frame.t_ns - self._last.t_ns) / NS_PER_S, 0.0)
 
-        def guard() -> tuple[tuple[SearchArea, ...], GuardRailResult]:
+        def guard() -> tuple[tuple[SearchArea, ...], GuardRailResult, tuple[RailLine, ...]]:
             tracked_m = (
                 [(t.x_m, t.y_m) for t in self._tracker.predicted("vehicle", ego, dt_s)]
                 if p.vehicle.track_gate_m > 0
@@ -553,9 +563,13 @@ class FusionEngine:
             areas = search_areas(
                 image, camera, frame.radar, p.vehicle, frame.speed_mps, tracked_m, centres_y_m
             )
-            return areas, detect_guard_rails(areas, frame.speed_mps, p.guardrail)
+            found = detect_guard_rails(areas, frame.speed_mps, p.guardrail)
+            rails, lines, self._rail_returns = along_rail_lines(
+                found, frame.radar, self._rail_returns, ego, dt_s, p.guardrail
+            )
+            return areas, rails, lines
 
-        (areas, rails), rails_ms = _timed(guard)
+        (areas, rails, rail_lines), rails_ms = _timed(guard)
         vehicle, vehicle_ms = _timed(
             lambda: detect_vehicles(
                 areas, frame.radar, camera, p.vehicle, rails.guard_rail_targets, image
@@ -589,6 +603,7 @@ class FusionEngine:
             motion_stereo=motion,
             areas=areas,
             guardrail=rails,
+            rail_lines=rail_lines,
             vehicle=vehicle,
             pedestrian=pedestrian,
             tracking=tracks,

@@ -35,6 +35,9 @@ Steps, each visible in `GuardRailCheck`:
    resumes.
    `manage_overlaps` False searches every slow area.
 
+Beyond the paper, `core.rail_lines` then labels the searched targets that lie along the
+line of the rail returns found over the last seconds (verdict 'line').
+
 A right rail is the mirror image of a left one: steps 1-5 give the left-rail results of the
 patch flipped left-right, flipped back (step 1 keeps the mirrored orientation, steps 3-5
 read the edges from the right). `rail_edges`
@@ -135,7 +138,7 @@ from core.params import GuardRailParams
 from core.search_area import SearchArea, overlap_fraction
 
 SIDES = ("left", "right")
-VERDICTS = ("guard_rail", "not_guard_rail", "overlap")
+VERDICTS = ("guard_rail", "not_guard_rail", "overlap", "line")
 
 # Fig. 2, as read in the module Notes: (a) erosion, (b) dilation.
 EROSION_KERNEL = np.ones((1, 3), dtype=np.uint8)
@@ -232,7 +235,8 @@ class GuardRailCheck:
 
     @property
     def guard_rail(self) -> bool:
-        """Labelled guard rail, by a search or by overlap."""
+        """Labelled guard rail, by a search, by overlap or along a rail line
+        (`core.rail_lines`)."""
         return self.verdict != "not_guard_rail"
 
 

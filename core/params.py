@@ -339,9 +339,20 @@ class GuardRailParams:
     # beyond the paper: a slow target where the tracker expects a vehicle
     # (SearchArea.tracked) is not checked; the papers' preset: False
     skip_tracked_vehicles: bool = True
+    # beyond the paper (core/rail_lines.py): a slow target along the line of the returns
+    # found on a rail over the last line_memory_s, within line_gate_m across, is guard rail
+    # too (0 s: off, the papers' preset)
+    line_memory_s: float = 2.0
+    line_gate_m: float = 0.4
 
     def __post_init__(self) -> None:
-        _positive(self, "max_speed_mps", "sobel_threshold")
+        _positive(self, "max_speed_mps", "sobel_threshold", "line_gate_m")
+        _check(
+            math.isfinite(self.line_memory_s) and self.line_memory_s >= 0,
+            "line_memory_s",
+            "a time >= 0 (0: off)",
+            self.line_memory_s,
+        )
         _check(self.max_holes >= 0, "max_holes", "an integer >= 0", self.max_holes)
         _fraction(self, "min_length_fraction", "overlap_fraction")
         _check(

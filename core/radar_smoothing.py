@@ -85,9 +85,7 @@ def _moved(point: RememberedPoint, ego: EgoMotion | None, dt_s: float) -> Rememb
     if ego is None or not math.isfinite(speed):
         speed = point.range_rate_mps
     else:
-        cos, sin = math.cos(-ego.dyaw_rad), math.sin(-ego.dyaw_rad)
-        dx, dy = x - ego.dx_m, y - ego.dy_m
-        x, y = cos * dx - sin * dy, sin * dx + cos * dy
+        x, y = ego.carry(x, y)
     r = math.hypot(x, y)
     if r > 0:
         x, y = x + speed * dt_s * x / r, y + speed * dt_s * y / r

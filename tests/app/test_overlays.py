@@ -235,12 +235,15 @@ def test_followed_line_is_drawn_on_its_pixels_in_the_image() -> None:
     assert is_colour(short, overlays.SHORT_LINE_COLOUR)[220, 102]
 
 
-def test_area_labelled_by_overlap_is_hatched_inside_its_crop_only() -> None:
+@pytest.mark.parametrize("verdict", ["overlap", "line"])
+def test_area_labelled_by_overlap_or_rail_line_is_hatched_inside_its_crop_only(
+    verdict: str,
+) -> None:
     skipped = area((100, 200, 160, 230), index=4)
     out = drawn(
         overlays.put_guard_rails,
         black(),
-        [check(4, "overlap", overlapped_by=3)],
+        [check(4, verdict, overlapped_by=3 if verdict == "overlap" else None)],
         [skipped, area((0, 0, 10, 10), 3)],
     )
     hatch = is_colour(out, overlays.OVERLAP_COLOUR)

@@ -1,0 +1,151 @@
+"""Guard-rail lines from the returns found over the last seconds (core.rail_lines): known
+answers on rails placed by hand, the car's motion, the gates, and the papers' preset."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from core.ego import EgoMotion
+from core.guardrail import GuardRailCheck, GuardRailResult
+from core.io.frame import RadarTarget
+from core.params import GuardRailParams, Params, ParamsError, params_from
+from core.rail_lines import (
+    LINE_EXTEND_M,
+    LINE_MAX_RMS_M,
+    RailReturn,
+    along_rail_lines,
+    fit_line,
+    remember,
+)
+
+PARAMS = GuardRailParams()
+NO_PIXELS = np.zeros((0, 2), dtype=np.int32)
+
+
+def target_at(x_m: float, y_m: float) -> RadarTarget:
+    return RadarTarget.from_polar(math.hypot(x_m, y_m), math.atan2(y_m, x_m), 0.0, 0.0, 0.0, 0.0)
+
+
+def check(index: int, verdict: str, side: str = "right") -> GuardRailCheck:
+    return GuardRailCheck(
+        target_index=index,
+        side=side,
+        real_speed_mps=0.0,
+        edges=np.zeros((4, 8), dtype=np.uint8),
+        line_px=NO_PIXELS,
+        holes_px=NO_PIXELS,
+        coverage=0.3 if verdict == "not_guard_rail" else 0.9,
+        verdict=verdict,
+        overlapped_by=None,
+    )
+
+
+def rail_y_m(x_m: float) -> float:
+    """A right rail 7 m off, bending gently left: y = -7 + 0.002 x^2."""
+    return -7.0 + 0.002 * x_m**2
+
+
+def returns_on_rail(xs: list[float], side: str = "right") -> list[RailReturn]:
+    return [RailReturn(x, rail_y_m(x), side, 0.0) for x in xs]
+
+
+def test_a_bending_rail_is_fitted_with_its_parabola() -> None:
+    line = fit_line(returns_on_rail([10, 15, 20, 25, 30, 40]), "right")
+    assert line is not None and line.returns == 6
+    assert line.coefficients == pytest.approx((-7.0, 0.0, 0.002), abs=1e-9)
+    assert line.rms_m == pytest.approx(0.0, abs=1e-9)
+    assert (line.x_near_m, line.x_far_m) == (10 - LINE_EXTEND_M, 40 + LINE_EXTEND_M)
+    assert line.y_m(50.0) == pytest.approx(rail_y_m(50.0))
+    assert line.holds(50.0, rail_y_m(50.0) + 0.3, 0.4)
+    assert not line.holds(50.0, rail_y_m(50.0) + 0.5, 0.4)  # beyond the gate across
+    assert not line.holds(61.0, rail_y_m(61.0), 0.4)  # beyond the stretch
+
+
+def test_four_returns_make_a_straight_line_and_fewer_none() -> None:
+    straight = fit_line(returns_on_rail([10, 14, 18, 22]), "right")
+    assert straight is not None and len(straight.coefficients) == 2
+    assert fit_line(returns_on_rail([10, 14, 18]), "right") is None
+    assert fit_line(returns_on_rail([10, 14, 18, 22]), "left") is None  # the other side's
+
+
+def test_returns_close_together_or_scattered_make_no_line() -> None:
+    assert fit_line(returns_on_rail([20, 22, 24, 26, 28]), "right") is None  # 8 m < 10 m
+    zigzag = [
+        RailReturn(x, -7.0 + (1.0 if k % 2 else -1.0), "right", 0.0)
+        for k, x in enumerate([10, 15, 20, 25, 30, 35, 40])
+    ]
+    assert fit_line(zigzag, "right") is None  # RMS 1 m > LINE_MAX_RMS_M
+    assert LINE_MAX_RMS_M < 1.0
+
+
+def test_remembered_returns_move_with_the_car_and_age_out() -> None:
+    old = [RailReturn(20.0, -7.0, "right", 0.5), RailReturn(30.0, -7.0, "right", 1.95)]
+    found = GuardRailResult(
+        (check(0, "guard_rail"), check(1, "overlap"), check(2, "not_guard_rail"))
+    )
+    radar = (target_at(40.0, -7.0), target_at(45.0, -7.0), target_at(50.0, -7.0))
+    # the car drove 3 m ahead in 0.1 s, turning 0.01 rad left
+    ego = EgoMotion(3.0, 0.0, 0.01, 0.1)
+    kept = remember(old, found, radar, ego, 0.1, 2.0)
+    # the second aged past 2 s; only the searched rail of this frame joins
+    assert len(kept) == 2
+    moved, new = kept
+    x, y = ego.carry(20.0, -7.0)
+    assert (moved.x_m, moved.y_m, moved.age_s) == (pytest.approx(x), pytest.approx(y), 0.6)
+    assert moved.x_m == pytest.approx(17.0, abs=0.1) and moved.y_m < -7.0  # turned left
+    assert (new.x_m, new.y_m, new.age_s) == (pytest.approx(40.0), pytest.approx(-7.0), 0.0)
+    # the car's motion unknown: nothing remembered can be placed
+    assert remember(old, found, radar, None, 0.1, 2.0) == (new,)
+
+
+def test_a_target_along_the_line_is_labelled_and_others_are_not() -> None:
+    xs = [10.0, 16.0, 22.0, 28.0, 34.0, 40.0]
+    radar = [target_at(x, rail_y_m(x)) for x in xs]
+    radar += [
+        target_at(46.0, rail_y_m(46.0) + 0.3),  # 6: along the rail, missed by the search
+        target_at(52.0, rail_y_m(52.0) + 1.5),  # 7: a parked car inside the rail
+        target_at(30.0, 7.0),  # 8: the left side has no line
+        target_at(90.0, rail_y_m(90.0)),  # 9: beyond the line's stretch
+    ]
+    checks = [check(i, "guard_rail") for i in range(6)]
+    checks += [check(6, "not_guard_rail"), check(7, "not_guard_rail")]
+    checks += [check(8, "not_guard_rail", "left"), check(9, "not_guard_rail")]
+    result, lines, kept = along_rail_lines(
+        GuardRailResult(tuple(checks)), radar, (), EgoMotion.still(0.1), 0.1, PARAMS
+    )
+    assert [c.verdict for c in result.checks][6:] == ["line"] + ["not_guard_rail"] * 3
+    assert result.guard_rail_targets == frozenset(range(7))
+    assert [line.side for line in lines] == ["right"] and lines[0].returns == 6
+    assert len(kept) == 6  # the found ones; one labelled along the line is not remembered
+    # the next frame, nothing found by the search: the remembered returns still make the line
+    again, _, _ = along_rail_lines(
+        GuardRailResult((check(6, "not_guard_rail"),)),
+        radar,
+        kept,
+        EgoMotion.still(0.1),
+        0.1,
+        PARAMS,
+    )
+    assert again.checks[0].verdict == "line"
+
+
+def test_the_papers_preset_leaves_the_verdicts_as_they_are() -> None:
+    papers = params_from("papers").guardrail
+    assert papers.line_memory_s == 0.0 and PARAMS.line_memory_s == 2.0
+    found = GuardRailResult(tuple(check(i, "guard_rail") for i in range(6)))
+    radar = [target_at(x, rail_y_m(x)) for x in (10.0, 16.0, 22.0, 28.0, 34.0, 40.0)]
+    result, lines, kept = along_rail_lines(found, radar, (), EgoMotion.still(0.1), 0.1, papers)
+    assert result is found and lines == () and kept == ()
+
+
+@pytest.mark.parametrize(
+    ("field", "value"), [("line_memory_s", -1.0), ("line_memory_s", math.nan), ("line_gate_m", 0.0)]
+)
+def test_bad_line_parameters_are_rejected_by_name(field: str, value: float) -> None:
+    with pytest.raises(ParamsError, match=field):
+        dataclasses.replace(PARAMS, **{field: value})
+    assert Params().guardrail == PARAMS
