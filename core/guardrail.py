@@ -4,7 +4,9 @@ search area (paper 002, sections II and III).
 Only slow targets are checked: real speed |range rate + ego speed cos(azimuth)| below
 `max_speed_mps` (paper 002, II; 1.5 m/s here, Notes), and, beyond the paper, not those
 where the tracker expects a vehicle (`skip_tracked_vehicles`: the area is `tracked`, within
-`vehicle.track_gate_m` of a confirmed vehicle track's predicted position, Notes). A target
+`vehicle.track_gate_m` of a confirmed vehicle track's predicted position, Notes) nor those
+too far for vision (fewer than `vehicle.min_image_px_per_m` image pixels per metre across
+their area, as the vehicle search; Notes). A target
 left of the car (y_m > 0) is checked for a left guard rail, the others for a right one.
 Steps, each visible in `GuardRailCheck`:
 
@@ -111,6 +113,11 @@ Notes:
       and highway the same; exurban RD / (RD + FN) 0.725 -> 0.730, 0.717 -> 0.722.
       nuScenes and aiMotive the same (their vehicles labelled guard rail stand parked and
       were never tracked).
+    - Too far: the line search on an area of a dozen pixels found a line across most of
+      them; on nuScenes scene-0523 it labelled parked trucks and trailers 47-87 m away guard
+      rail. Leaving out the areas the vehicle search leaves out (10 px/m): vehicles
+      labelled guard rail on nuScenes 58 -> 22; the synthetic drives' areas are all finer
+      and do not change; aiMotive the same (no vehicle is searched there either).
     - Step 6: each following area is compared with the area where the rail was found, as
       the paper says. Comparing it with the last one labelled instead, so that a chain
       could follow a rail beyond the first area, labelled 196 rather than 195 slow targets
@@ -552,13 +559,18 @@ def _check_areas(areas: tuple[SearchArea, ...]) -> None:
 
 
 def detect_guard_rails(
-    areas: tuple[SearchArea, ...], ego_speed_mps: float, params: GuardRailParams
+    areas: tuple[SearchArea, ...],
+    ego_speed_mps: float,
+    params: GuardRailParams,
+    min_image_px_per_m: float = 0.0,
 ) -> GuardRailResult:
     """Paper 002: which slow radar targets are guard rails.
 
     areas: the search areas of one frame (`core.search_area.search_areas`), any order;
     ego_speed_mps: the car's speed (NaN when unknown: no target is known to be slow, and
-    the result is empty). Returns one check per slow target, nearest first.
+    the result is empty); min_image_px_per_m: areas coarser than this are too far for
+    vision and not checked (`VehicleParams.min_image_px_per_m`, beyond the paper). Returns
+    one check per slow target, nearest first.
     """
     _check_areas(areas)
     if not (math.isfinite(ego_speed_mps) or math.isnan(ego_speed_mps)):
@@ -572,6 +584,7 @@ def detect_guard_rails(
         for area in areas
         if is_slow(area.target, ego_speed_mps, params)
         and not (params.skip_tracked_vehicles and area.tracked)
+        and area.image_px_per_m >= min_image_px_per_m
     ]
     slow.sort(key=lambda item: item[0].x_m)  # stable: equal distances keep radar order
 

@@ -236,8 +236,8 @@ class VehicleParams:
     # face (the papers' preset: False, the mean of its targets)
     distance_of_nearest_target: bool = True
     # beyond the papers (core/vehicle.py Notes): a target whose area has fewer image pixels
-    # per metre across than this is too far to be refined and is not searched (0: every
-    # target is, the papers' preset)
+    # per metre across than this is too far for vision: neither checked for a guard rail nor
+    # searched for a vehicle (0: every target is, the papers' preset)
     min_image_px_per_m: float = 10.0
 
     def __post_init__(self) -> None:

@@ -451,6 +451,16 @@ def test_a_crawling_car_and_a_tracked_vehicle_are_not_checked() -> None:
     assert [c.real_speed_mps for c in checked if c.target_index == 0] == [pytest.approx(3.0)]
 
 
+def test_an_area_too_coarse_for_vision_is_not_checked() -> None:
+    """An area of 64 px over 2.5 m has 25.6 image px per metre: checked below that limit
+    (the vehicle search's, `VehicleParams.min_image_px_per_m`), left out above it."""
+    a = chain_areas()["A"]
+    assert a.image_px_per_m == pytest.approx(64 / 2.5)
+    assert [c.target_index for c in detect_guard_rails((a,), 20.0, PARAMS, 25.0).checks] == [0]
+    assert detect_guard_rails((a,), 20.0, PARAMS, 26.0).checks == ()
+    assert Params().vehicle.min_image_px_per_m == 10.0
+
+
 # --- bad input --------------------------------------------------------------------------------
 
 
