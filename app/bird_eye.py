@@ -1,11 +1,11 @@
 """The bird's-eye view of one engine frame in viser's 3D scene: the road seen from above.
 
 Two parts. `bird_eye_geometry` is pure: it places what a `core.engine.FrameResult` found
-(radar targets, vehicles, confirmed tracks), the ego car and the ground texture as numpy
-arrays, tested without a browser; the render worker runs it. `BirdEyeScene` sends that
-geometry to a viser scene on a fixed set of node names, updated in place frame after frame;
-`top_down_pose` is where a viewer's camera looks at it from, `top_down_view` points a
-client's camera there.
+(radar targets, vehicles, confirmed tracks, guard-rail lines), the ego car and the ground
+texture as numpy arrays, tested without a browser; the render worker runs it.
+`BirdEyeScene` sends that geometry to a viser scene on a fixed set of node names, updated in
+place frame after frame; `top_down_pose` is where a viewer's camera looks at it from,
+`top_down_view` points a client's camera there.
 
 Frame: the vehicle frame of `core.camera` and `core.tracking`, which is viser's world frame
 here: x forward, y left, z up, metres, origin on the ground under the rear axle. A scene
@@ -28,6 +28,7 @@ starting at the radar distance and extending away, as wide as vision measured th
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -71,6 +72,7 @@ EGO_COLOUR: Rgb = (90, 140, 200)  # steel blue
 RADAR_MARKER_Z_M = 0.5  # markers float at bumper height, on a car's rear face
 TRACK_LINE_Z_M = 0.05  # trails just over the road
 TRACK_LABEL_Z_M = 2.0  # "#id" over the car's roof
+RAIL_STEP_M = 2.0  # a guard-rail line is drawn as segments this long
 TRACK_COLOURS: Mapping[Kind, Rgb] = {
     "vehicle": VEHICLE_COLOUR,
     "pedestrian": PEDESTRIAN_COLOUR,
@@ -103,6 +105,8 @@ class BirdEyeGeometry:
     track_segments_m: (K, 2, 3) float64 start and end of each step of the confirmed tracks'
     history (oldest first) at `TRACK_LINE_Z_M`; track_colours: (K, 3) uint8, by kind
     (`TRACK_COLOURS`).
+    rail_segments_m: (R, 2, 3) float64 the guard-rail lines of `core.rail_lines`, sampled
+    every RAIL_STEP_M at `TRACK_LINE_Z_M`, drawn in `GUARD_RAIL_LINE_COLOUR`.
     label_positions_m: (T, 3) float64, one per confirmed track over its position;
     label_texts: T strings, "#id", or "#id ?" for a track missed this frame (as the camera
     overlay).
@@ -118,6 +122,7 @@ class BirdEyeGeometry:
     vehicle_sizes_m: FloatArray
     track_segments_m: FloatArray
     track_colours: ColourArray
+    rail_segments_m: FloatArray
     label_positions_m: FloatArray
     label_texts: tuple[str, ...]
     ego_centre_m: FloatArray
@@ -143,10 +148,10 @@ def bird_eye_geometry(
 
     result: the frame; params: the parameters it was computed with (the ground texture
     covers `bird_eye_extent_m(params.motion_stereo)`); offset_y_m: added to every y; layers:
-    the camera's layers, of which the view follows four: `radar` (the markers), `vehicles`
-    (the boxes), `tracks` (trail and label of each track measured this frame) and
-    `coasting` (those of the tracks missed this frame). ValueError when offset_y_m is not
-    finite.
+    the camera's layers, of which the view follows five: `radar` (the markers), `vehicles`
+    (the boxes), `guardrails` (the rail lines), `tracks` (trail and label of each track
+    measured this frame) and `coasting` (those of the tracks missed this frame). ValueError
+    when offset_y_m is not finite.
     """
     if not math.isfinite(offset_y_m):
         raise ValueError(f"offset_y_m: expected a finite number of metres, got {offset_y_m}")
@@ -175,6 +180,12 @@ def bird_eye_geometry(
         labels.append((track.x_m, track.y_m + dy, TRACK_LABEL_Z_M))
         texts.append(f"#{track.id}" if track.misses == 0 else f"#{track.id} ?")
 
+    rails = [
+        ((x0, y0 + dy, TRACK_LINE_Z_M), (x1, y1 + dy, TRACK_LINE_Z_M))
+        for line in (result.rail_lines if layers.guardrails else ())
+        for (x0, y0), (x1, y1) in itertools.pairwise(line.sampled_m(RAIL_STEP_M))
+    ]
+
     x_min_m, x_max_m, y_min_m, y_max_m = bird_eye_extent_m(params.motion_stereo)
     return BirdEyeGeometry(
         radar_points_m=radar_points,
@@ -183,6 +194,7 @@ def bird_eye_geometry(
         vehicle_sizes_m=sizes,
         track_segments_m=np.array(segments, dtype=np.float64).reshape(-1, 2, 3),
         track_colours=_colours(segment_colours),
+        rail_segments_m=np.array(rails, dtype=np.float64).reshape(-1, 2, 3),
         label_positions_m=_points(labels),
         label_texts=tuple(texts),
         ego_centre_m=np.array(
@@ -226,7 +238,8 @@ class BirdEyeScene:
 
     The first `show` creates a fixed set of nodes; later calls update their attributes and
     never add or remove a node (a new name per frame would grow viser's message buffer):
-    prefix/ground (image), /ego (box), /radar (point cloud), /tracks (line segments), and
+    prefix/ground (image), /ego (box), /radar (point cloud), /tracks (line segments: the
+    tracks' trails and the rail lines), and
     pools /vehicles/0 .. /vehicles/{MAX_VEHICLE_BOXES - 1} (boxes) and /labels/0 ..
     /labels/{MAX_TRACK_LABELS - 1} (labels), the unused ones hidden. A frame with more
     vehicles or tracks than a pool holds shows the nearest (least x) and drops the others.
@@ -265,10 +278,14 @@ class BirdEyeScene:
             nodes.radar.colors = geometry.radar_colours
         nodes.radar.visible = len(geometry.radar_points_m) > 0
 
-        if len(geometry.track_segments_m):
-            nodes.tracks.points = geometry.track_segments_m.astype(np.float32)
-            nodes.tracks.colors = np.repeat(geometry.track_colours[:, None, :], 2, axis=1)
-        nodes.tracks.visible = len(geometry.track_segments_m) > 0
+        # the tracks' trails and the rail lines share one node of line segments
+        segments = np.concatenate([geometry.track_segments_m, geometry.rail_segments_m])
+        if len(segments):
+            rail_colours = np.tile(GUARD_RAIL_LINE_COLOUR, (len(geometry.rail_segments_m), 1))
+            colours = np.concatenate([geometry.track_colours, rail_colours]).astype(np.uint8)
+            nodes.tracks.points = segments.astype(np.float32)
+            nodes.tracks.colors = np.repeat(colours[:, None, :], 2, axis=1)
+        nodes.tracks.visible = len(segments) > 0
 
         nearest = np.argsort(geometry.vehicle_centres_m[:, 0], kind="stable")
         for k, box in enumerate(nodes.vehicles):

@@ -91,6 +91,15 @@ class RailLine:
     def y_m(self, x_m: float) -> float:
         return float(sum(c * x_m**k for k, c in enumerate(self.coefficients)))
 
+    def sampled_m(self, step_m: float) -> tuple[tuple[float, float], ...]:
+        """Points (x_m, y_m) of the line every step_m from x_near_m to x_far_m (both ends
+        included), for drawing. ValueError when step_m is not a positive distance."""
+        if not step_m > 0 or not math.isfinite(step_m):
+            raise ValueError(f"step_m: expected a positive distance, got {step_m}")
+        n = max(1, math.ceil((self.x_far_m - self.x_near_m) / step_m))
+        xs = np.linspace(self.x_near_m, self.x_far_m, n + 1)
+        return tuple((float(x), self.y_m(float(x))) for x in xs)
+
     def holds(self, x_m: float, y_m: float, gate_m: float) -> bool:
         """(x_m, y_m) lies along the line's stretch, within gate_m of it across."""
         return self.x_near_m <= x_m <= self.x_far_m and abs(y_m - self.y_m(x_m)) <= gate_m

@@ -31,6 +31,7 @@ from core.engine import FrameResult, FusionEngine
 from core.io.drive import Drive
 from core.io.frame import RadarTarget
 from core.params import Params
+from core.rail_lines import RailLine
 from core.tracking import Track, TrackResult
 from core.vehicle import TargetResult, Vehicle, VehicleResult
 
@@ -98,12 +99,14 @@ def frame(
     targets: Sequence[TargetResult] = (),
     vehicles: Sequence[Vehicle] = (),
     tracks: Sequence[Track] = (),
+    rail_lines: Sequence[RailLine] = (),
 ) -> FrameResult:
-    """The highway engine frame with its detections and tracks replaced."""
+    """The highway engine frame with its detections, tracks and rail lines replaced."""
     return dataclasses.replace(
         engine_result(),
         vehicle=VehicleResult(tuple(targets), tuple(vehicles)),
         tracking=TrackResult(tuple(tracks), ()),
+        rail_lines=tuple(rail_lines),
     )
 
 
@@ -164,6 +167,20 @@ def test_tracks_of_every_kind_are_drawn_in_their_colour_tentative_ones_are_not()
     assert g.label_texts == ("#3", "#4 ?", "#6")  # "?": missed this frame, as on the camera
 
 
+def test_a_rail_line_is_drawn_along_its_stretch_on_the_guardrails_layer() -> None:
+    line = RailLine("right", (-7.0, 0.0, 0.002), 10.0, 20.0, 0.1, 6)
+    g = bird_eye_geometry(frame(rail_lines=[line]), PARAMS, offset_y_m=-22.0)
+    step = bird_eye.RAIL_STEP_M
+    xs = np.arange(10.0, 20.0 + step / 2, step)
+    ys = -7.0 + 0.002 * xs**2 - 22.0
+    assert g.rail_segments_m.shape == (len(xs) - 1, 2, 3)
+    np.testing.assert_allclose(g.rail_segments_m[:, 0, :2], np.c_[xs[:-1], ys[:-1]])
+    np.testing.assert_allclose(g.rail_segments_m[:, 1, :2], np.c_[xs[1:], ys[1:]])
+    assert (g.rail_segments_m[..., 2] == TRAIL_Z_M).all()
+    hidden = bird_eye_geometry(frame(rail_lines=[line]), PARAMS, layers=Layers(guardrails=False))
+    assert hidden.rail_segments_m.shape == (0, 2, 3)
+
+
 def test_the_view_follows_the_camera_layers_of_what_it_draws() -> None:
     result = frame(
         [target("vehicle", 20.0, 1.0)],
@@ -198,6 +215,7 @@ def test_empty_frame_gives_empty_arrays_of_the_documented_shapes() -> None:
         "vehicle_sizes_m": ((0, 3), np.float64),
         "track_segments_m": ((0, 2, 3), np.float64),
         "track_colours": ((0, 3), np.uint8),
+        "rail_segments_m": ((0, 2, 3), np.float64),
         "label_positions_m": ((0, 3), np.float64),
     }
     for name, (shape, dtype) in shapes.items():
@@ -375,13 +393,17 @@ def test_scene_shows_a_frame_where_its_geometry_says(recorder: RecordingScene) -
         [target("vehicle", 25.0, -1.5), target("guard_rail", 12.0, 3.0, 1)],
         [car(20.0, 1.0, 1.6)],
         [track(7, "vehicle", ((10.0, 1.0), (12.0, 1.5), (14.0, 2.0)))],
+        [RailLine("left", (6.0, 0.0), 10.0, 14.0, 0.1, 4)],
     )
     g = show(view(recorder), result, result, offset_y_m=-22.0)
     radar = recorder.handle("/bev/radar")
     np.testing.assert_allclose(radar.points, g.radar_points_m, atol=0.02)  # float16 on the wire
     np.testing.assert_array_equal(radar.colors, g.radar_colours)
     tracks = recorder.handle("/bev/tracks")
-    np.testing.assert_allclose(tracks.points, g.track_segments_m, atol=1e-5)
+    drawn = np.concatenate([g.track_segments_m, g.rail_segments_m])  # trails, then rails
+    assert len(g.rail_segments_m) == 2
+    np.testing.assert_allclose(tracks.points, drawn, atol=1e-5)
+    assert (tracks.colors[-2:] == overlays.GUARD_RAIL_LINE_COLOUR).all()
     (box,) = visible(recorder, "vehicles")
     np.testing.assert_allclose(box.position, g.vehicle_centres_m[0])
     np.testing.assert_allclose(box.dimensions, g.vehicle_sizes_m[0])
