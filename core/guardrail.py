@@ -6,9 +6,8 @@ Only slow targets are checked: real speed |range rate + ego speed cos(azimuth)| 
 where the tracker expects a vehicle (`skip_tracked_vehicles`: the area is `tracked`, within
 `vehicle.track_gate_m` of a confirmed vehicle track's predicted position, Notes) nor those
 too far for vision (fewer than `vehicle.min_image_px_per_m` image pixels per metre across
-their area, as the vehicle search; Notes). A target
-left of the car (y_m > 0) is checked for a left guard rail, the others for a right one.
-Steps, each visible in `GuardRailCheck`:
+their area, as the vehicle search; Notes). A target left of the car (y_m > 0) is checked
+for a left guard rail, the others for a right one. Steps, each visible in `GuardRailCheck`:
 
 1. edges: 3x3 Sobel derivatives of the area's patch; an edge pixel has a gradient module
    above `sobel_threshold` and the orientation of a guard rail on that side (fig. 1): its

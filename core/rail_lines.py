@@ -58,11 +58,14 @@ from core.guardrail import SIDES, GuardRailResult
 from core.io.frame import RadarTarget
 from core.params import GuardRailParams
 
+# Steps 2-3 (module docstring): the returns a line needs, and how far along x they spread;
+# a parabola from this many; the fit's largest RMS residual; how far the line holds beyond
+# its nearest and farthest return.
 LINE_MIN_POINTS = 4
-QUADRATIC_MIN_POINTS = 6
 LINE_MIN_SPAN_M = 10.0
-LINE_EXTEND_M = 20.0
+QUADRATIC_MIN_POINTS = 6
 LINE_MAX_RMS_M = 0.4
+LINE_EXTEND_M = 20.0
 
 
 @dataclass(frozen=True)
