@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -27,6 +28,7 @@ import numpy.typing as npt
 from core.checks import require_finite
 
 NS_PER_S = 1_000_000_000
+XY = TypeVar("XY", float, npt.NDArray[np.float64])
 # A car whose speed reads below this stands still (wheel-speed sensors read 0 below ~0.1 m/s).
 STANDSTILL_SPEED_MPS = 0.05
 
@@ -55,9 +57,9 @@ class EgoMotion:
     def still(cls, dt_s: float = 0.0) -> EgoMotion:
         return cls(0.0, 0.0, 0.0, dt_s, 1)
 
-    def carry(self, x_m: float, y_m: float) -> tuple[float, float]:
-        """A point standing still in the world, from the vehicle frame at the first instant
-        into the one at the second: R(-dyaw) (p - (dx, dy))."""
+    def carry(self, x_m: XY, y_m: XY) -> tuple[XY, XY]:
+        """Points standing still in the world (floats or arrays), from the vehicle frame at
+        the first instant into the one at the second: R(-dyaw) (p - (dx, dy))."""
         cos, sin = math.cos(-self.dyaw_rad), math.sin(-self.dyaw_rad)
         dx, dy = x_m - self.dx_m, y_m - self.dy_m
         return cos * dx - sin * dy, sin * dx + cos * dy

@@ -86,7 +86,7 @@ from core.params import Params
 from core.pedestrian import PedestrianResult, detect_pedestrians
 from core.pitch import PitchMemory, PitchResult, detect_pitch
 from core.radar_smoothing import RememberedPoint, smooth_centres
-from core.rail_lines import RailLine, RailReturn, along_rail_lines
+from core.rail_lines import RailLine, RailReturns, along_rail_lines
 from core.search_area import SearchArea, search_areas
 from core.tracking import (
     Measurement,
@@ -209,7 +209,7 @@ class EngineState:
     pitch_memory: PitchMemory | None
     vehicle_boxes: tuple[Box, ...]
     radar_points: tuple[RememberedPoint, ...]
-    rail_returns: tuple[RailReturn, ...]
+    rail_returns: RailReturns
     last: _LastFrame
 
 
@@ -336,7 +336,7 @@ class FusionEngine:
         self._pitch_memory: PitchMemory | None = None
         self._vehicle_boxes: tuple[Box, ...] = ()
         self._radar_points: tuple[RememberedPoint, ...] = ()
-        self._rail_returns: tuple[RailReturn, ...] = ()
+        self._rail_returns = RailReturns.none()
         self._last: _LastFrame | None = None
         # after a start over: is the next frame's result from the start (a frame that cannot
         # be read within a from-start run breaks the drive as it breaks a playback)
@@ -367,7 +367,7 @@ class FusionEngine:
         self._pitch_memory = None
         self._vehicle_boxes = ()
         self._radar_points = ()
-        self._rail_returns = ()
+        self._rail_returns = RailReturns.none()
         self._last = None
         self._next_from_start = from_start
 

@@ -52,6 +52,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from core.ego import EgoMotion
 from core.guardrail import SIDES, GuardRailResult
@@ -68,15 +69,27 @@ LINE_MAX_RMS_M = 0.4
 LINE_EXTEND_M = 20.0
 
 
-@dataclass(frozen=True)
-class RailReturn:
-    """A return the filter found on a rail: where it is in the current vehicle frame, the side
-    of the road, and how long ago it was found."""
+F64Array = npt.NDArray[np.float64]
 
-    x_m: float
-    y_m: float
-    side: str
-    age_s: float
+
+@dataclass(frozen=True, eq=False)
+class RailReturns:
+    """The returns the filter found on rails, one entry each: x_m, y_m (N,) where they are in
+    the current vehicle frame; left (N,) bool: on the left rail (else the right); age_s (N,)
+    how long ago they were found."""
+
+    x_m: F64Array
+    y_m: F64Array
+    left: npt.NDArray[np.bool_]
+    age_s: F64Array
+
+    @staticmethod
+    def none() -> RailReturns:
+        empty = np.zeros(0, dtype=np.float64)
+        return RailReturns(empty, empty, np.zeros(0, dtype=bool), empty)
+
+    def __len__(self) -> int:
+        return len(self.x_m)
 
 
 @dataclass(frozen=True)
@@ -109,65 +122,73 @@ class RailLine:
 
 
 def remember(
-    remembered: Sequence[RailReturn],
+    remembered: RailReturns,
     result: GuardRailResult,
     radar: Sequence[RadarTarget],
     ego: EgoMotion | None,
     dt_s: float,
     memory_s: float,
-) -> tuple[RailReturn, ...]:
+) -> RailReturns:
     """Step 1: the remembered returns carried into this frame, with this frame's found ones."""
-    kept: list[RailReturn] = []
-    if ego is not None:
-        for r in remembered:
-            if r.age_s + dt_s <= memory_s:
-                x, y = ego.carry(r.x_m, r.y_m)
-                kept.append(RailReturn(x, y, r.side, r.age_s + dt_s))
-    kept += [
-        RailReturn(radar[c.target_index].x_m, radar[c.target_index].y_m, c.side, 0.0)
-        for c in result.checks
-        if c.verdict == "guard_rail"
-    ]
-    return tuple(kept)
+    found = [c for c in result.checks if c.verdict == "guard_rail"]
+    new = RailReturns(
+        np.array([radar[c.target_index].x_m for c in found], dtype=np.float64),
+        np.array([radar[c.target_index].y_m for c in found], dtype=np.float64),
+        np.array([c.side == "left" for c in found], dtype=bool),
+        np.zeros(len(found), dtype=np.float64),
+    )
+    if ego is None or not len(remembered):
+        return new
+    age_s = remembered.age_s + dt_s
+    kept = age_s <= memory_s
+    x_m, y_m = ego.carry(remembered.x_m[kept], remembered.y_m[kept])
+    return RailReturns(
+        np.concatenate([x_m, new.x_m]),
+        np.concatenate([y_m, new.y_m]),
+        np.concatenate([remembered.left[kept], new.left]),
+        np.concatenate([age_s[kept], new.age_s]),
+    )
 
 
-def fit_line(returns: Sequence[RailReturn], side: str) -> RailLine | None:
+def fit_line(returns: RailReturns, side: str) -> RailLine | None:
     """Step 2 on one side (None: no line there)."""
-    mine = [r for r in returns if r.side == side]
-    if len(mine) < LINE_MIN_POINTS:
+    mine = returns.left == (side == "left")
+    n = int(np.count_nonzero(mine))
+    if n < LINE_MIN_POINTS:
         return None
-    x = np.array([r.x_m for r in mine])
-    y = np.array([r.y_m for r in mine])
-    if x.max() - x.min() < LINE_MIN_SPAN_M:
+    x, y = returns.x_m[mine], returns.y_m[mine]
+    x_near, x_far = float(x.min()), float(x.max())
+    if x_far - x_near < LINE_MIN_SPAN_M:
         return None
-    degree = 2 if len(mine) >= QUADRATIC_MIN_POINTS else 1
-    coefficients = np.polynomial.polynomial.polyfit(x, y, degree)
-    rms = math.sqrt(float(np.mean((y - np.polynomial.polynomial.polyval(x, coefficients)) ** 2)))
+    powers = np.vander(x, 3 if n >= QUADRATIC_MIN_POINTS else 2, increasing=True)
+    # least squares by the normal equations: a 2x2 or 3x3 system, x within a radar's range
+    coefficients = np.linalg.solve(powers.T @ powers, powers.T @ y)
+    rms = math.sqrt(float(np.mean((y - powers @ coefficients) ** 2)))
     if rms > LINE_MAX_RMS_M:
         return None
     return RailLine(
         side,
         tuple(float(c) for c in coefficients),
-        float(x.min()) - LINE_EXTEND_M,
-        float(x.max()) + LINE_EXTEND_M,
+        x_near - LINE_EXTEND_M,
+        x_far + LINE_EXTEND_M,
         rms,
-        len(mine),
+        n,
     )
 
 
 def along_rail_lines(
     result: GuardRailResult,
     radar: Sequence[RadarTarget],
-    remembered: Sequence[RailReturn],
+    remembered: RailReturns,
     ego: EgoMotion | None,
     dt_s: float,
     params: GuardRailParams,
-) -> tuple[GuardRailResult, tuple[RailLine, ...], tuple[RailReturn, ...]]:
+) -> tuple[GuardRailResult, tuple[RailLine, ...], RailReturns]:
     """Steps 1-3: the filter's result with the targets along a rail line labelled ('line'),
     the lines, and the returns to remember for the next frame. With `line_memory_s` 0 the
     result is `result`, and there are no lines and nothing to remember."""
     if params.line_memory_s <= 0:
-        return result, (), ()
+        return result, (), RailReturns.none()
     returns = remember(remembered, result, radar, ego, dt_s, params.line_memory_s)
     lines = tuple(line for side in SIDES if (line := fit_line(returns, side)) is not None)
     by_side = {line.side: line for line in lines}

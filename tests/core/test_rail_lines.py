@@ -16,7 +16,7 @@ from core.params import GuardRailParams, Params, ParamsError, params_from
 from core.rail_lines import (
     LINE_EXTEND_M,
     LINE_MAX_RMS_M,
-    RailReturn,
+    RailReturns,
     along_rail_lines,
     fit_line,
     remember,
@@ -49,8 +49,20 @@ def rail_y_m(x_m: float) -> float:
     return -7.0 + 0.002 * x_m**2
 
 
-def returns_on_rail(xs: list[float], side: str = "right") -> list[RailReturn]:
-    return [RailReturn(x, rail_y_m(x), side, 0.0) for x in xs]
+def returns_at(
+    xs: list[float], ys: list[float], side: str = "right", age_s: float = 0.0
+) -> RailReturns:
+    n = len(xs)
+    return RailReturns(
+        np.array(xs, dtype=np.float64),
+        np.array(ys, dtype=np.float64),
+        np.full(n, side == "left"),
+        np.full(n, age_s),
+    )
+
+
+def returns_on_rail(xs: list[float], side: str = "right") -> RailReturns:
+    return returns_at(xs, [rail_y_m(x) for x in xs], side)
 
 
 def test_a_bending_rail_is_fitted_with_its_parabola() -> None:
@@ -74,32 +86,38 @@ def test_four_returns_make_a_straight_line_and_fewer_none() -> None:
 
 def test_returns_close_together_or_scattered_make_no_line() -> None:
     assert fit_line(returns_on_rail([20, 22, 24, 26, 28]), "right") is None  # 8 m < 10 m
-    zigzag = [
-        RailReturn(x, -7.0 + (1.0 if k % 2 else -1.0), "right", 0.0)
-        for k, x in enumerate([10, 15, 20, 25, 30, 35, 40])
-    ]
+    xs = [10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0]
+    zigzag = returns_at(xs, [-7.0 + (1.0 if k % 2 else -1.0) for k in range(len(xs))])
+
     assert fit_line(zigzag, "right") is None  # RMS 1 m > LINE_MAX_RMS_M
     assert LINE_MAX_RMS_M < 1.0
 
 
 def test_remembered_returns_move_with_the_car_and_age_out() -> None:
-    old = [RailReturn(20.0, -7.0, "right", 0.5), RailReturn(30.0, -7.0, "right", 1.95)]
-    found = GuardRailResult(
-        (check(0, "guard_rail"), check(1, "overlap"), check(2, "not_guard_rail"))
+    old = RailReturns(
+        np.array([20.0, 30.0]),
+        np.array([-7.0, -7.0]),
+        np.array([False, True]),
+        np.array([0.5, 1.95]),
     )
-    radar = (target_at(40.0, -7.0), target_at(45.0, -7.0), target_at(50.0, -7.0))
+    found = GuardRailResult(
+        (check(0, "guard_rail", "left"), check(1, "overlap"), check(2, "not_guard_rail"))
+    )
+    radar = (target_at(40.0, 7.0), target_at(45.0, -7.0), target_at(50.0, -7.0))
     # the car drove 3 m ahead in 0.1 s, turning 0.01 rad left
     ego = EgoMotion(3.0, 0.0, 0.01, 0.1)
     kept = remember(old, found, radar, ego, 0.1, 2.0)
     # the second aged past 2 s; only the searched rail of this frame joins
     assert len(kept) == 2
-    moved, new = kept
     x, y = ego.carry(20.0, -7.0)
-    assert (moved.x_m, moved.y_m, moved.age_s) == (pytest.approx(x), pytest.approx(y), 0.6)
-    assert moved.x_m == pytest.approx(17.0, abs=0.1) and moved.y_m < -7.0  # turned left
-    assert (new.x_m, new.y_m, new.age_s) == (pytest.approx(40.0), pytest.approx(-7.0), 0.0)
+    np.testing.assert_allclose(kept.x_m, [x, 40.0])
+    np.testing.assert_allclose(kept.y_m, [y, 7.0])
+    np.testing.assert_array_equal(kept.left, [False, True])
+    np.testing.assert_allclose(kept.age_s, [0.6, 0.0])
+    assert kept.x_m[0] == pytest.approx(17.0, abs=0.1) and kept.y_m[0] < -7.0  # turned left
     # the car's motion unknown: nothing remembered can be placed
-    assert remember(old, found, radar, None, 0.1, 2.0) == (new,)
+    alone = remember(old, found, radar, None, 0.1, 2.0)
+    assert len(alone) == 1 and alone.x_m[0] == pytest.approx(40.0)
 
 
 def test_a_target_along_the_line_is_labelled_and_others_are_not() -> None:
@@ -115,7 +133,12 @@ def test_a_target_along_the_line_is_labelled_and_others_are_not() -> None:
     checks += [check(6, "not_guard_rail"), check(7, "not_guard_rail")]
     checks += [check(8, "not_guard_rail", "left"), check(9, "not_guard_rail")]
     result, lines, kept = along_rail_lines(
-        GuardRailResult(tuple(checks)), radar, (), EgoMotion.still(0.1), 0.1, PARAMS
+        GuardRailResult(tuple(checks)),
+        radar,
+        RailReturns.none(),
+        EgoMotion.still(0.1),
+        0.1,
+        PARAMS,
     )
     assert [c.verdict for c in result.checks][6:] == ["line"] + ["not_guard_rail"] * 3
     assert result.guard_rail_targets == frozenset(range(7))
@@ -138,8 +161,10 @@ def test_the_papers_preset_leaves_the_verdicts_as_they_are() -> None:
     assert papers.line_memory_s == 0.0 and PARAMS.line_memory_s == 2.0
     found = GuardRailResult(tuple(check(i, "guard_rail") for i in range(6)))
     radar = [target_at(x, rail_y_m(x)) for x in (10.0, 16.0, 22.0, 28.0, 34.0, 40.0)]
-    result, lines, kept = along_rail_lines(found, radar, (), EgoMotion.still(0.1), 0.1, papers)
-    assert result is found and lines == () and kept == ()
+    result, lines, kept = along_rail_lines(
+        found, radar, RailReturns.none(), EgoMotion.still(0.1), 0.1, papers
+    )
+    assert result is found and lines == () and len(kept) == 0
 
 
 @pytest.mark.parametrize(
