@@ -486,8 +486,7 @@ def _guard_rail_savings(
             areas = search_areas(now.image, camera, now.radar, p)
             skip: frozenset[int] = frozenset()
             if gp is not None:
-                found = detect_guard_rails(areas, now.speed_mps, gp, p.min_image_px_per_m)
-                skip = found.guard_rail_targets
+                skip = detect_guard_rails(areas, now.speed_mps, gp).guard_rail_targets
             return detect_vehicles(areas, now.radar, camera, p, skip)
 
         return frame
@@ -503,9 +502,7 @@ def _guard_rail_savings(
     counts = []  # per frame: targets, slow, searched without and with OBM, guard rails
     for _, now in pairs:
         areas = search_areas(now.image, camera, now.radar, p)
-        without, with_obm = (
-            detect_guard_rails(areas, now.speed_mps, gp, p.min_image_px_per_m) for gp in (grd, obm)
-        )
+        without, with_obm = (detect_guard_rails(areas, now.speed_mps, gp) for gp in (grd, obm))
         counts.append(
             (
                 len(now.radar),

@@ -563,9 +563,7 @@ class FusionEngine:
             areas = search_areas(
                 image, camera, frame.radar, p.vehicle, frame.speed_mps, tracked_m, centres_y_m
             )
-            found = detect_guard_rails(
-                areas, frame.speed_mps, p.guardrail, p.vehicle.min_image_px_per_m
-            )
+            found = detect_guard_rails(areas, frame.speed_mps, p.guardrail)
             rails, lines, self._rail_returns = along_rail_lines(
                 found, frame.radar, self._rail_returns, ego, dt_s, p.guardrail
             )

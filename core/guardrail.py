@@ -5,9 +5,10 @@ Only slow targets are checked: real speed |range rate + ego speed cos(azimuth)| 
 `max_speed_mps` (paper 002, II; 1.5 m/s here, Notes), and, beyond the paper, not those
 where the tracker expects a vehicle (`skip_tracked_vehicles`: the area is `tracked`, within
 `vehicle.track_gate_m` of a confirmed vehicle track's predicted position, Notes) nor those
-too far for vision (fewer than `vehicle.min_image_px_per_m` image pixels per metre across
-their area, as the vehicle search; Notes). A target left of the car (y_m > 0) is checked
-for a left guard rail, the others for a right one. Steps, each visible in `GuardRailCheck`:
+too far for vision (`SearchArea.too_far`: fewer than `vehicle.min_image_px_per_m` image
+pixels per metre across their area, left out of the vehicle search too; Notes). A target
+left of the car (y_m > 0) is checked for a left guard rail, the others for a right one.
+Steps, each visible in `GuardRailCheck`:
 
 1. edges: 3x3 Sobel derivatives of the area's patch; an edge pixel has a gradient module
    above `sobel_threshold` and the orientation of a guard rail on that side (fig. 1): its
@@ -558,18 +559,14 @@ def _check_areas(areas: tuple[SearchArea, ...]) -> None:
 
 
 def detect_guard_rails(
-    areas: tuple[SearchArea, ...],
-    ego_speed_mps: float,
-    params: GuardRailParams,
-    min_image_px_per_m: float = 0.0,
+    areas: tuple[SearchArea, ...], ego_speed_mps: float, params: GuardRailParams
 ) -> GuardRailResult:
     """Paper 002: which slow radar targets are guard rails.
 
     areas: the search areas of one frame (`core.search_area.search_areas`), any order;
     ego_speed_mps: the car's speed (NaN when unknown: no target is known to be slow, and
-    the result is empty); min_image_px_per_m: areas coarser than this are too far for
-    vision and not checked (`VehicleParams.min_image_px_per_m`, beyond the paper). Returns
-    one check per slow target, nearest first.
+    the result is empty). Returns one check per slow target, nearest first; areas too far
+    for vision (`SearchArea.too_far`, beyond the paper) are not checked.
     """
     _check_areas(areas)
     if not (math.isfinite(ego_speed_mps) or math.isnan(ego_speed_mps)):
@@ -583,7 +580,7 @@ def detect_guard_rails(
         for area in areas
         if is_slow(area.target, ego_speed_mps, params)
         and not (params.skip_tracked_vehicles and area.tracked)
-        and area.image_px_per_m >= min_image_px_per_m
+        and not area.too_far
     ]
     slow.sort(key=lambda item: item[0].x_m)  # stable: equal distances keep radar order
 

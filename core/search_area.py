@@ -107,8 +107,11 @@ class SearchArea:
     the crop is `image[row0:row1, col0:col1]`; y_left_m, y_right_m: the area's sides in the
     world (vehicle frame), at the target's x_m; patch: (h, w) uint8 grey, the crop resampled;
     px_per_m: patch pixels per metre across at the target's distance; tracked: the target lies
-    within `track_gate_m` of where a confirmed vehicle track is expected (`tracked_y_m`).
-    The patch is an array of its own (C-contiguous, writable), never a view of the image.
+    within `track_gate_m` of where a confirmed vehicle track is expected (`tracked_y_m`);
+    too_far: the area has fewer than `min_image_px_per_m` image pixels per metre across
+    (`image_px_per_m`), too coarse for vision: neither checked for a guard rail nor searched
+    for a vehicle. The patch is an array of its own (C-contiguous, writable), never a view of
+    the image.
     """
 
     target_index: int
@@ -121,6 +124,7 @@ class SearchArea:
     patch: npt.NDArray[np.uint8]
     px_per_m: float
     tracked: bool = False
+    too_far: bool = False
 
     @property
     def x_m(self) -> float:
@@ -287,6 +291,7 @@ def search_areas(
                 patch=patch,
                 px_per_m=size[0] / (c1 - c0) * width_px / widths_m[i],
                 tracked=on_track[i] is not None,
+                too_far=width_px / widths_m[i] < params.min_image_px_per_m,
             )
         )
     return tuple(areas)

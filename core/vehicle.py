@@ -462,8 +462,9 @@ def detect_vehicles(
             f"areas: expected at most one area per radar target 0..{len(radar) - 1}, "
             f"got target indices {sorted(a.target_index for a in areas)}"
         )
-    too_far = {a.target_index for a in areas if a.image_px_per_m < params.min_image_px_per_m}
-    searched = [a for a in areas if a.target_index not in guard_rails | too_far]
+    too_far = {a.target_index for a in areas if a.too_far}
+    skipped = guard_rails | too_far
+    searched = [a for a in areas if a.target_index not in skipped]
     found = {a.target_index: _search(a, params) for a in searched}
     chosen = {i: box for i, f in found.items() if (box := f.box_px) is not None}
     ids = list(chosen)

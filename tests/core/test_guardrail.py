@@ -452,12 +452,13 @@ def test_a_crawling_car_and_a_tracked_vehicle_are_not_checked() -> None:
 
 
 def test_an_area_too_coarse_for_vision_is_not_checked() -> None:
-    """An area of 64 px over 2.5 m has 25.6 image px per metre: checked below that limit
-    (the vehicle search's, `VehicleParams.min_image_px_per_m`), left out above it."""
+    """An area search_areas marked too far for vision (fewer image px per metre than
+    `VehicleParams.min_image_px_per_m`; this one has 64 px over 2.5 m) is left out."""
     a = chain_areas()["A"]
-    assert a.image_px_per_m == pytest.approx(64 / 2.5)
-    assert [c.target_index for c in detect_guard_rails((a,), 20.0, PARAMS, 25.0).checks] == [0]
-    assert detect_guard_rails((a,), 20.0, PARAMS, 26.0).checks == ()
+    assert a.image_px_per_m == pytest.approx(64 / 2.5) and not a.too_far
+    assert [c.target_index for c in detect_guard_rails((a,), 20.0, PARAMS).checks] == [0]
+    far = dataclasses.replace(a, too_far=True)
+    assert detect_guard_rails((far,), 20.0, PARAMS).checks == ()
     assert Params().vehicle.min_image_px_per_m == 10.0
 
 

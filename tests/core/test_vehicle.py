@@ -447,7 +447,9 @@ def test_an_area_with_too_few_pixels_per_metre_is_not_searched(
         (0.0, "vehicle"),
     ):
         params = dataclasses.replace(PARAMS, min_image_px_per_m=limit)
-        result = detect_vehicles((area,), radar, cam, params)
+        (marked,) = search_areas(image, cam, radar, params)
+        assert marked.too_far == (verdict == "too_far")
+        result = detect_vehicles((marked,), radar, cam, params)
         assert result.targets[0].verdict == verdict
         assert len(result.vehicles) == (verdict == "vehicle")
     assert PARAMS.min_image_px_per_m == 10.0
