@@ -94,6 +94,7 @@ from core.tracking import (
     Tracker,
     TrackerState,
     TrackResult,
+    coasting_boxes,
     confirmed_sources,
 )
 from core.vehicle import VehicleResult, detect_vehicles
@@ -589,7 +590,12 @@ class FusionEngine:
             )
         )
         measurements = tracker_measurements(vehicle, pedestrian, areas, rails.guard_rail_targets)
-        tracks, tracking_ms = _timed(lambda: self._tracker.update(measurements, ego, dt_s))
+
+        def track() -> TrackResult:
+            tracks = self._tracker.update(measurements, ego, dt_s)
+            return coasting_boxes(tracks, camera) if p.tracking.coasting_boxes_follow else tracks
+
+        tracks, tracking_ms = _timed(track)
         # read-only: the next frame reads it, and a kept state holds it by reference
         pitch.memory.row_histogram.flags.writeable = False
         self._pitch_memory = pitch.memory

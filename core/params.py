@@ -560,6 +560,10 @@ class TrackingParams:
     # the margin keeps a person seen far away, whose distance is noisy, from seeming to run)
     pedestrian_max_speed_mps: float = 3.0
     pedestrian_speed_gate_sigmas: float = 2.0
+    # a confirmed track missed on this frame shows its last box moved to where the track
+    # expects its object, sized for that distance (chosen; false: the last box stays where it
+    # was measured, as in the papers' preset; core/tracking.py, `coasting_boxes`)
+    coasting_boxes_follow: bool = True
 
     def __post_init__(self) -> None:
         _check(self.confirm_frames >= 1, "confirm_frames", "an integer >= 1", self.confirm_frames)

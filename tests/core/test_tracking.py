@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from core.camera import CameraModel, Extrinsics, Intrinsics
 from core.ego import EgoMotion, step
 from core.params import ParamsError, TrackingParams
 from core.tracking import (
@@ -17,6 +18,7 @@ from core.tracking import (
     Track,
     Tracker,
     TrackResult,
+    coasting_boxes,
     confirmed_sources,
     solve_assignment,
 )
@@ -601,3 +603,39 @@ def test_bad_tracking_params_name_the_field(field: str, value: float) -> None:
     with pytest.raises(ParamsError, match=f"^{field}: expected"):
         TrackingParams(**{field: value})  # type: ignore[arg-type]
     assert TrackingParams(guard_rail_accel_psd_m2ps3=0.0, unknown_ego_sigma_m=0.0)
+
+
+# --- coasting boxes ----------------------------------------------------------------------------
+
+# a pinhole 1.3 m above the road at the vehicle frame's origin, looking straight ahead: the
+# ground point (x, y, 0) lands at u = 320 - 700 y / x, v = 240 + 700 * 1.3 / x
+FLAT_CAMERA = CameraModel(Intrinsics(700.0, 700.0, 320.0, 240.0, 640, 480), Extrinsics(1.3))
+
+
+def _track(
+    track_id: int, x_m: float, misses: int, kind: Kind = "vehicle", confirmed: bool = True
+) -> Track:
+    return Track(
+        track_id, kind, x_m, 1.0, 0.0, 0.0, 2.0, 0.3, 0.2, (300.0, 200.0, 340.0, 230.0),
+        5, misses, 6, confirmed, None if misses else 0, ((x_m, 1.0),),
+    )  # fmt: skip
+
+
+def test_a_coasting_track_shows_its_last_box_where_it_expects_its_object_now() -> None:
+    coasting, measured = _track(1, 20.0, misses=2), _track(2, 20.0, misses=0)
+    result = coasting_boxes(TrackResult((coasting, measured), (7,)), FLAT_CAMERA)
+    # sides at y = 2 and 0 m, bottom on the road at 20 m; the last box's height / width
+    # (30 / 40) kept for the new width of 70 px
+    assert result.tracks[0].box_px == pytest.approx((250.0, 285.5 - 52.5, 320.0, 285.5))
+    assert result.tracks[0] == dataclasses.replace(coasting, box_px=result.tracks[0].box_px)
+    assert result.tracks[1] == measured
+    assert result.ended == (7,)
+
+
+def test_only_confirmed_coasting_boxes_in_front_of_the_camera_move() -> None:
+    kept = (
+        _track(1, 20.0, misses=1, confirmed=False),  # tentative: not shown
+        _track(2, 20.0, misses=1, kind="guard_rail"),  # a radar point, no box of its own
+        _track(3, -4.0, misses=1),  # behind the camera
+    )
+    assert coasting_boxes(TrackResult(kept, ()), FLAT_CAMERA).tracks == kept
