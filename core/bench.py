@@ -47,7 +47,7 @@ if TYPE_CHECKING:
     from core.ego import EgoMotion
     from core.io.drive import Drive
     from core.io.frame import FrameInput, RadarTarget
-    from core.params import GuardRailParams, Params
+    from core.params import GuardRailParams, Params, TrackingParams
     from core.tracking import Measurement, Tracker
 
 # Paper 000, section III: "640x300 images using standard Pentium 4 at 3.0 GHz" (None: the
@@ -305,6 +305,7 @@ class _TrackingCase:
     measurements: tuple[Measurement, ...]
     ego: EgoMotion | None
     dt_s: float
+    camera: CameraModel
 
 
 def _tracking_cases(drive: Drive, pairs: Sequence[Pair], params: Params) -> list[_TrackingCase]:
@@ -333,20 +334,27 @@ def _tracking_cases(drive: Drive, pairs: Sequence[Pair], params: Params) -> list
         ego = frame.ego if last is not None else None
         dt_s = 0.0 if last is None else max((frame.t_ns - last.t_ns) / NS_PER_S, 0.0)
         if i in wanted:
-            cases.append(_TrackingCase(copy.deepcopy(tracker), measurements, ego, dt_s))
+            cases.append(
+                _TrackingCase(copy.deepcopy(tracker), measurements, ego, dt_s, result.camera)
+            )
         tracker.update(measurements, ego, dt_s)
         last = frame
     return cases
 
 
-def _tracking_runs(cases: Sequence[_TrackingCase]) -> list[Run]:
-    """Tracker.update on each case, on a fresh copy of the tracker after the frame before."""
+def _tracking_runs(cases: Sequence[_TrackingCase], params: TrackingParams) -> list[Run]:
+    """The engine's tracking stage (`update_tracks`) on each case, on a fresh copy of the
+    tracker after the frame before."""
+    from core.engine import update_tracks
+
     runs: list[Run] = []
     for case in cases:
 
         def run(case=case) -> Callable[[], object]:
             tracker = copy.deepcopy(case.tracker)
-            return lambda: tracker.update(case.measurements, case.ego, case.dt_s)
+            return lambda: update_tracks(
+                tracker, case.measurements, case.ego, case.dt_s, case.camera, params
+            )
 
         runs.append(run)
     return runs
@@ -658,7 +666,7 @@ def bench(
         try:
             for stage in chosen:
                 runs = (
-                    _tracking_runs(cases)
+                    _tracking_runs(cases, params.tracking)
                     if stage == "tracking"
                     else make[stage](camera, pairs, params)
                 )

@@ -67,12 +67,12 @@ from __future__ import annotations
 import threading
 import time
 from collections import OrderedDict
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Protocol, TypeVar
 
 from core.camera import CameraModel
-from core.ego import NS_PER_S
+from core.ego import NS_PER_S, EgoMotion
 from core.guardrail import GuardRailResult, detect_guard_rails
 from core.io.errors import RecordingError
 from core.io.frame import FrameInput
@@ -82,7 +82,7 @@ from core.motion_stereo import (
     MotionStereoState,
     frames_to_forget,
 )
-from core.params import Params
+from core.params import Params, TrackingParams
 from core.pedestrian import PedestrianResult, detect_pedestrians
 from core.pitch import PitchMemory, PitchResult, detect_pitch
 from core.radar_smoothing import RememberedPoint, smooth_centres
@@ -298,6 +298,21 @@ def tracker_measurements(
                 Measurement("guard_rail", a.target.x_m, a.target.y_m, 0.0, box, a.target_index)
             )
     return out
+
+
+def update_tracks(
+    tracker: Tracker,
+    measurements: Sequence[Measurement],
+    ego: EgoMotion | None,
+    dt_s: float,
+    camera: CameraModel,
+    params: TrackingParams,
+) -> TrackResult:
+    """The tracking stage: the tracker's update with this frame's measurements, then the
+    boxes of confirmed tracks missed this frame moved to where they are expected
+    (`coasting_boxes`) unless `params.coasting_boxes_follow` is off."""
+    tracks = tracker.update(measurements, ego, dt_s)
+    return coasting_boxes(tracks, camera) if params.coasting_boxes_follow else tracks
 
 
 class FusionEngine:
@@ -591,11 +606,9 @@ class FusionEngine:
         )
         measurements = tracker_measurements(vehicle, pedestrian, areas, rails.guard_rail_targets)
 
-        def track() -> TrackResult:
-            tracks = self._tracker.update(measurements, ego, dt_s)
-            return coasting_boxes(tracks, camera) if p.tracking.coasting_boxes_follow else tracks
-
-        tracks, tracking_ms = _timed(track)
+        tracks, tracking_ms = _timed(
+            lambda: update_tracks(self._tracker, measurements, ego, dt_s, camera, p.tracking)
+        )
         # read-only: the next frame reads it, and a kept state holds it by reference
         pitch.memory.row_histogram.flags.writeable = False
         self._pitch_memory = pitch.memory

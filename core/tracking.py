@@ -158,8 +158,9 @@ class Track:
     id: unique within a Tracker since its last reset, from 1. x_m, y_m: filtered position;
     vx_mps, vy_mps: velocity over the ground in the vehicle axes; width_m: filtered width;
     sigma_x_m, sigma_y_m: sqrt of the position covariance diagonal; box_px: the last associated
-    detection's box (moved by `coasting_boxes` for a confirmed track missed this frame); hits: frames with a detection; misses: consecutive frames without one (0
-    when measured this frame); age: frames since birth (1 on the first); confirmed: hits reached
+    detection's box (moved by `coasting_boxes` for a confirmed track missed this frame); hits:
+    frames with a detection; misses: consecutive frames without one (0 when measured this
+    frame); age: frames since birth (1 on the first); confirmed: hits reached
     confirm_frames; source_index: this frame's Measurement.source_index, None when missed;
     history_m: up to history_length filtered positions (x_m, y_m), oldest first, this frame's
     last, all in the current vehicle frame.
