@@ -328,7 +328,11 @@ def _tracking_cases(drive: Drive, pairs: Sequence[Pair], params: Params) -> list
         result = engine.process(frame)
         measurements = tuple(
             tracker_measurements(
-                result.vehicle, result.pedestrian, result.areas, result.guardrail.guard_rail_targets
+                result.vehicle,
+                result.pedestrian,
+                result.areas,
+                result.guardrail.guard_rail_targets,
+                result.track_search,
             )
         )
         ego = frame.ego if last is not None else None

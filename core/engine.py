@@ -88,6 +88,8 @@ from core.pitch import PitchMemory, PitchResult, detect_pitch
 from core.radar_smoothing import RememberedPoint, smooth_centres
 from core.rail_lines import RailLine, RailReturns, along_rail_lines
 from core.search_area import SearchArea, search_areas
+from core.track_search import NOTHING as NOTHING_SEARCHED
+from core.track_search import TrackSearchResult, search_tracks
 from core.tracking import (
     Measurement,
     Track,
@@ -143,7 +145,9 @@ class FrameResult:
     camera: this frame's camera (calibration with the detected pitch); areas: the radar
     targets' search areas; guardrail: the guard-rail labels (paper 002's and along the rail
     lines, `core.rail_lines`); rail_lines: those lines; vehicle, pedestrian: the papers'
-    per-frame detections;
+    per-frame detections (vehicle's vehicles end with those `track_search` found, which have
+    no radar target); track_search: the vision searches for tracked vehicles no radar
+    target returned (`core.track_search`);
     tracking: every live track after this frame; tracked_vehicles / tracked_pedestrians:
     the confirmed tracks of each kind; tracked_guard_rails: indices of this frame's radar
     targets labelled guard rail and associated with a confirmed guard-rail track;
@@ -168,6 +172,7 @@ class FrameResult:
     preview: bool = False
     from_start: bool = False
     rail_lines: tuple[RailLine, ...] = ()
+    track_search: TrackSearchResult = NOTHING_SEARCHED
 
     @property
     def tracked_vehicles(self) -> tuple[Track, ...]:
@@ -277,12 +282,23 @@ def tracker_measurements(
     pedestrian: PedestrianResult,
     areas: tuple[SearchArea, ...],
     guard_rails: frozenset[int],
+    searched: TrackSearchResult = NOTHING_SEARCHED,
 ) -> list[Measurement]:
     """This frame's detections as the tracker's measurements: vehicles at the radar's
-    distance with vision's lateral position and width, kept pedestrians where their base
-    meets the road, guard-rail targets at the radar's position."""
+    distance with vision's lateral position and width (the last ones, those `searched`
+    found, for the tracks they were searched for), kept pedestrians where their base meets
+    the road, guard-rail targets at the radar's position."""
+    first_searched = len(vehicle.vehicles) - len(searched.vehicles)
     out = [
-        Measurement("vehicle", v.distance_m, v.lateral_m, v.width_m, v.box_px, i)
+        Measurement(
+            "vehicle",
+            v.distance_m,
+            v.lateral_m,
+            v.width_m,
+            v.box_px,
+            i,
+            None if i < first_searched else searched.track_of[i - first_searched],
+        )
         for i, v in enumerate(vehicle.vehicles)
     ]
     out += [
@@ -560,12 +576,14 @@ class FusionEngine:
 
         dt_s = 0.0 if self._last is None else max((frame.t_ns - self._last.t_ns) / NS_PER_S, 0.0)
 
+        predicted = (
+            self._tracker.predicted("vehicle", ego, dt_s)
+            if p.vehicle.track_gate_m > 0 or p.vehicle.track_search_frames > 0
+            else ()
+        )
+
         def guard() -> tuple[tuple[SearchArea, ...], GuardRailResult, tuple[RailLine, ...]]:
-            tracked_m = (
-                [(t.x_m, t.y_m) for t in self._tracker.predicted("vehicle", ego, dt_s)]
-                if p.vehicle.track_gate_m > 0
-                else []
-            )
+            tracked_m = [(t.x_m, t.y_m) for t in predicted] if p.vehicle.track_gate_m > 0 else []
             centres_y_m, self._radar_points = smooth_centres(
                 self._radar_points,
                 frame.radar,
@@ -586,11 +604,17 @@ class FusionEngine:
             return areas, rails, lines
 
         (areas, rails, rail_lines), rails_ms = _timed(guard)
-        vehicle, vehicle_ms = _timed(
-            lambda: detect_vehicles(
+
+        def vehicles() -> tuple[VehicleResult, TrackSearchResult]:
+            found = detect_vehicles(
                 areas, frame.radar, camera, p.vehicle, rails.guard_rail_targets, image
             )
-        )
+            searched = search_tracks(
+                image, camera, predicted, frame.radar, found, p.vehicle, frame.speed_mps
+            )
+            return VehicleResult(found.targets, found.vehicles + searched.vehicles), searched
+
+        (vehicle, searched), vehicle_ms = _timed(vehicles)
         boxes = tuple(v.box_px for v in vehicle.vehicles)
         pedestrian, pedestrian_ms = _timed(
             lambda: detect_pedestrians(
@@ -604,7 +628,9 @@ class FusionEngine:
                 p.pedestrian,
             )
         )
-        measurements = tracker_measurements(vehicle, pedestrian, areas, rails.guard_rail_targets)
+        measurements = tracker_measurements(
+            vehicle, pedestrian, areas, rails.guard_rail_targets, searched
+        )
 
         tracks, tracking_ms = _timed(
             lambda: update_tracks(self._tracker, measurements, ego, dt_s, camera, p.tracking)
@@ -623,6 +649,7 @@ class FusionEngine:
             areas=areas,
             guardrail=rails,
             rail_lines=rail_lines,
+            track_search=searched,
             vehicle=vehicle,
             pedestrian=pedestrian,
             tracking=tracks,

@@ -182,6 +182,15 @@ class VehicleParams:
     # beyond the papers (core/search_area.py Notes): such a target's area is centred on the
     # tracked vehicle's lateral position (vision's, filtered), not on the radar point
     centre_on_track: bool = True
+    # beyond the papers (core/track_search.py): a confirmed vehicle track no radar target
+    # returned on this frame is searched for by vision in an area on its prediction, on at
+    # most track_search_frames consecutive frames without radar (0: off, the papers'
+    # preset), unless nearer vehicles hide more than track_search_hidden_fraction of its
+    # expected box; the box found must agree with the track's lateral position and width
+    # within track_search_agreement_m
+    track_search_frames: int = 2
+    track_search_hidden_fraction: float = 0.2
+    track_search_agreement_m: float = 0.3
     # beyond the papers (core/radar_smoothing.py): each area is centred on its radar point's
     # lateral position averaged over about lateral_smoothing_s of scans, a point pairing with
     # the last scans' within lateral_smoothing_gate_m across (the papers' preset: 0, every
@@ -262,6 +271,13 @@ class VehicleParams:
             "narrow_width_m",
             "merge_max_gap_m",
             "lateral_smoothing_gate_m",
+            "track_search_agreement_m",
+        )
+        _check(
+            self.track_search_frames >= 0,
+            "track_search_frames",
+            "a whole number of frames >= 0 (0: off)",
+            self.track_search_frames,
         )
         _check(
             math.isfinite(self.lateral_smoothing_s) and self.lateral_smoothing_s >= 0,
@@ -283,6 +299,7 @@ class VehicleParams:
             "merge_overlap_fraction",
             "similar_size_ratio",
             "same_base_fraction",
+            "track_search_hidden_fraction",
         )
         _check(
             math.isfinite(self.top_search_ratio) and self.top_search_ratio >= 0,

@@ -107,6 +107,9 @@ Kind = Literal["vehicle", "pedestrian", "guard_rail"]
 KINDS: tuple[Kind, ...] = ("vehicle", "pedestrian", "guard_rail")
 
 Box = tuple[float, float, float, float]
+# The x variance of a detection searched for a track (`Measurement.for_track`), whose x_m
+# is the track's own prediction: (1 km)^2, so that the update leaves x as predicted.
+UNMEASURED_VAR_M2 = 1e6
 FloatArray = npt.NDArray[np.float64]
 
 
@@ -122,8 +125,11 @@ class Measurement:
     x_m: distance ahead (radar for vehicles and guard rails; ground plane for pedestrians);
     y_m: lateral centre, positive left; width_m: vision width (0.0 for guard rails); box_px:
     (u0, v0, u1, v1) full-image pixels ((0, 0, 0, 0) allowed); source_index: index of the
-    detection in the engine's per-frame list of its kind. ValueError naming the field when a
-    number is not finite, width_m < 0, the box is inverted or source_index < 0.
+    detection in the engine's per-frame list of its kind; for_track: the id of the track
+    this detection was searched for without a radar return (`core.track_search`): x_m is
+    that track's prediction, not a measurement, and the detection goes to that track or to
+    none (None: an ordinary detection). ValueError naming the field when a number is not
+    finite, width_m < 0, the box is inverted or source_index < 0.
     """
 
     kind: Kind
@@ -132,6 +138,7 @@ class Measurement:
     width_m: float
     box_px: Box
     source_index: int
+    for_track: int | None = None
 
     def __post_init__(self) -> None:
         _require_kind("kind", self.kind)
@@ -149,6 +156,9 @@ class Measurement:
         index = self.source_index
         if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or index < 0:
             raise ValueError(f"source_index: expected an integer >= 0, got {self.source_index!r}")
+        track = self.for_track
+        if track is not None and (isinstance(track, bool) or not isinstance(track, int)):
+            raise ValueError(f"for_track: expected a track id or None, got {track!r}")
 
 
 @dataclass(frozen=True)
@@ -163,7 +173,8 @@ class Track:
     frame); age: frames since birth (1 on the first); confirmed: hits reached
     confirm_frames; source_index: this frame's Measurement.source_index, None when missed;
     history_m: up to history_length filtered positions (x_m, y_m), oldest first, this frame's
-    last, all in the current vehicle frame.
+    last, all in the current vehicle frame; unreturned: consecutive frames without a
+    detection backed by radar (a miss or a detection searched for the track, `for_track`).
     """
 
     id: int
@@ -182,6 +193,7 @@ class Track:
     confirmed: bool
     source_index: int | None
     history_m: tuple[tuple[float, float], ...]
+    unreturned: int = 0
 
 
 @dataclass(frozen=True)
@@ -214,38 +226,42 @@ def confirmed_sources(result: TrackResult, kind: Kind) -> frozenset[int]:
     )
 
 
+def expected_boxes(tracks: Sequence[Track], camera: CameraModel) -> list[Box | None]:
+    """Where each track's box is expected on this frame from its position and width: the
+    bottom row is the image of the ground point (x_m, y_m, 0), the sides the images of
+    (x_m, y_m +- width_m / 2, 0), the height the last box's height / width times the new
+    width. None for a track without a width or a last box, or whose points do not all land
+    in front of the camera."""
+    if not tracks:
+        return []
+    points = np.array(
+        [(t.x_m, t.y_m + side * t.width_m / 2, 0.0) for t in tracks for side in (0, 1, -1)]
+    )
+    uv, in_front = camera.project(points)
+    boxes: list[Box | None] = []
+    for i, t in enumerate(tracks):
+        (_, v), (u_left, _), (u_right, _) = uv[3 * i : 3 * i + 3].tolist()
+        u0, v0, u1, v1 = t.box_px
+        if not (in_front[3 * i : 3 * i + 3].all() and u_right > u_left and u1 > u0):
+            boxes.append(None)
+            continue
+        height_px = (v1 - v0) / (u1 - u0) * (u_right - u_left)
+        boxes.append((u_left, v - height_px, u_right, v))
+    return boxes
+
+
 def coasting_boxes(result: TrackResult, camera: CameraModel) -> TrackResult:
     """`result` with each confirmed vehicle or pedestrian track missed on this frame showing
-    its last box where the track expects its object now (step 6).
-
-    The box's bottom row is the image of the track's ground point (x_m, y_m, 0), its sides
-    the images of (x_m, y_m +- width_m / 2, 0), its height the last box's height / width
-    times the new width. A track whose points do not all land in front of the camera keeps
-    its last box.
-    """
+    its last box where the track expects its object now (step 6, `expected_boxes`); a track
+    without an expected box keeps its last box."""
     moving = [
         t
         for t in result.tracks
-        if t.confirmed
-        and t.misses
-        and t.kind != "guard_rail"
-        and t.width_m > 0
-        and t.box_px[2] > t.box_px[0]
+        if t.confirmed and t.misses and t.kind != "guard_rail" and t.width_m > 0
     ]
-    if not moving:
+    boxes = {t.id: b for t, b in zip(moving, expected_boxes(moving, camera), strict=True) if b}
+    if not boxes:
         return result
-    points = np.array(
-        [(t.x_m, t.y_m + side * t.width_m / 2, 0.0) for t in moving for side in (0, 1, -1)]
-    )
-    uv, in_front = camera.project(points)
-    boxes: dict[int, Box] = {}
-    for i, t in enumerate(moving):
-        (_, v), (u_left, _), (u_right, _) = uv[3 * i : 3 * i + 3].tolist()
-        if not (in_front[3 * i : 3 * i + 3].all() and u_right > u_left):
-            continue
-        u0, v0, u1, v1 = t.box_px
-        height_px = (v1 - v0) / (u1 - u0) * (u_right - u_left)
-        boxes[t.id] = (u_left, v - height_px, u_right, v)
     return TrackResult(
         tuple(replace(t, box_px=boxes[t.id]) if t.id in boxes else t for t in result.tracks),
         result.ended,
@@ -330,12 +346,15 @@ def _assign(cost: list[list[float]]) -> list[tuple[int, int]]:
     return [(c, r) for r, c in pairs] if transposed else pairs
 
 
-def _measurement_var(params: TrackingParams, kind: Kind, x_m: float) -> tuple[float, float]:
-    """The diagonal of R, the covariance of a measurement's (x_m, y_m), m^2."""
-    if kind == "vehicle":
+def _measurement_var(params: TrackingParams, m: Measurement) -> tuple[float, float]:
+    """The diagonal of R, the covariance of a measurement's (x_m, y_m), m^2. A detection
+    searched for a track does not measure x_m: its variance is UNMEASURED_VAR_M2."""
+    if m.for_track is not None:
+        return UNMEASURED_VAR_M2, params.vision_sigma_y_m**2
+    if m.kind == "vehicle":
         sx, sy = params.radar_sigma_x_m, params.vision_sigma_y_m
-    elif kind == "pedestrian":
-        sx = max(params.pedestrian_sigma_x_fraction * abs(x_m), params.pedestrian_min_sigma_x_m)
+    elif m.kind == "pedestrian":
+        sx = max(params.pedestrian_sigma_x_fraction * abs(m.x_m), params.pedestrian_min_sigma_x_m)
         sy = params.vision_sigma_y_m
     else:
         sx, sy = params.radar_sigma_x_m, params.guard_rail_sigma_y_m
@@ -400,6 +419,7 @@ class _TrackState:
         self.width_var_m2 = params.width_sigma_m**2
         self.box_px = m.box_px
         self.hits, self.misses, self.age = 1, 0, 1
+        self.unreturned = 0  # a searched detection never starts a track
         self.confirmed = self.hits >= params.confirm_frames
         self.too_fast = False  # a pedestrian track that moved surely faster than a person
         self.source_index: int | None = m.source_index
@@ -511,6 +531,7 @@ class _TrackState:
         self.box_px = m.box_px
         self.hits += 1
         self.misses = 0
+        self.unreturned = 0 if m.for_track is None else self.unreturned + 1
         self.confirmed = not self.too_fast and (
             self.confirmed or self.hits >= params.confirm_frames
         )
@@ -541,6 +562,7 @@ class _TrackState:
 
     def miss(self) -> None:
         self.misses += 1
+        self.unreturned += 1
         self.source_index = None
 
     def record(self, params: TrackingParams) -> None:
@@ -570,6 +592,7 @@ class _TrackState:
             confirmed=self.confirmed,
             source_index=self.source_index,
             history_m=self.history_m,
+            unreturned=self.unreturned,
         )
 
 
@@ -668,16 +691,23 @@ class Tracker:
         self._move_and_predict(tracks, ego, dt_s)  # 1-2
         # 3. association, per kind
         zs = [(float(m.x_m), float(m.y_m)) for m in measurements]
-        rs = [_measurement_var(p, m.kind, m.x_m) for m in measurements]
+        rs = [_measurement_var(p, m) for m in measurements]
         taken: dict[int, int] = {}  # track position in tracks -> measurement position
         for kind in KINDS:
             rows = [i for i, t in enumerate(tracks) if t.kind == kind]
-            cols = [j for j, m in enumerate(measurements) if m.kind == kind]
+            cols = [j for j, m in enumerate(measurements) if m.kind == kind and m.for_track is None]
             if not rows or not cols:
                 continue
             cost = [[tracks[i].gated_cost(*zs[j], rs[j], p) for j in cols] for i in rows]
             for r, c in _assign(cost):
                 taken[rows[r]] = cols[c]
+        # detections searched for a track: to that track, if still free and within its gates
+        position = {t.id: i for i, t in enumerate(tracks)}
+        for col, m in enumerate(measurements):
+            at = None if m.for_track is None else position.get(m.for_track)
+            if at is not None and at not in taken and tracks[at].kind == m.kind:
+                if math.isfinite(tracks[at].gated_cost(*zs[col], rs[col], p)):
+                    taken[at] = col
         # 4-5. update, misses and births
         live: list[_TrackState] = []
         ended: list[int] = []
@@ -699,7 +729,7 @@ class Tracker:
             live.append(track)
         used = set(taken.values())
         for j, m in enumerate(measurements):
-            if j not in used:
+            if j not in used and m.for_track is None:
                 live.append(_TrackState(self._next_id, m, rs[j], p))
                 self._next_id += 1
         self._tracks = live  # ascending ids: survivors in order, then the newborn

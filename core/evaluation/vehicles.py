@@ -24,6 +24,10 @@ Here, on each frame:
   vehicle (framed or not: a return from a hidden car is not a not-vehicle obstacle) is an
   FP when an estimate came from it and an NVO when none did (a target the guard-rail
   filter labelled is one vision did not validate).
+- Beyond the paper, an estimate that came from no radar target (a vehicle vision found
+  where the tracker expected one, `core.track_search`; a track coasting through a frame
+  without a detection) is an FP when its position lies on no truth vehicle, listed under
+  the index -1 - its place among the frame's estimates.
 
 Where the paper is ambiguous, and what was chosen:
 - It counts a vehicle either refined or not contained, never both. A vehicle refined by an
@@ -279,6 +283,11 @@ def score_frame(
         t = radar[i]
         if not any(lies_on(t.x_m, t.y_m, o) for o in all_vehicles):
             obstacles.append((i, "fp" if i in validated else "nvo"))
+    for k, e in enumerate(estimates):
+        if not e.target_indices and not any(
+            lies_on(e.distance_m, e.lateral_m, o) for o in all_vehicles
+        ):
+            obstacles.append((-1 - k, "fp"))
     return FrameVehicles(
         index, tuple(vehicles), tuple(obstacles), tuple(rd_iou), tuple(distance_error_m)
     )

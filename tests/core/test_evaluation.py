@@ -176,6 +176,24 @@ def test_each_refined_vehicle_gets_the_best_box_iou_of_the_estimates_that_refine
     assert s.rd_iou_share(0.6) == 1.0 and s.rd_iou_share(0.9) == 0.0
 
 
+def test_an_estimate_without_radar_off_every_vehicle_is_a_false_positive() -> None:
+    """Vision found it where a track expected a vehicle (core.track_search), or a track
+    coasted there: an FP listed as -1 - its place among the estimates, unless it lies on a
+    truth vehicle (framed or not)."""
+    objects = [car(1, 20.0, 0.0), car(2, 25.0, -4.0, occlusion=0.7)]
+    radar = [target(20.0, 0.0)]
+    estimates = [
+        Estimate(20.1, 0.0, 1.8, ()),  # refines car 1 without radar: RD, not FP
+        Estimate(26.0, -4.0, 1.8, ()),  # on the hidden car 2: not FP
+        Estimate(40.0, 3.0, 1.8, ()),  # on nothing: FP
+    ]
+    frame = score_frame(0, objects, radar, [area(0, radar[0])], estimates, TOLERANCE_M)
+    assert frame.vehicles == ((1, "rd"),)
+    assert frame.obstacles == ((-3, "fp"),)
+    s = frame_stats([frame])
+    assert (s.rd, s.fp, s.nvo) == (1, 1, 0) and s.fp_at == ((0, -3),)
+
+
 def test_a_vehicle_wider_than_the_area_is_a_radar_false_negative() -> None:
     truck = car(1, 20.0, 0.0, width_m=2.6)  # wider than the 2.5 m area
     radar = [target(20.0, 0.0)]

@@ -20,6 +20,7 @@ from core.tracking import (
     TrackResult,
     coasting_boxes,
     confirmed_sources,
+    expected_boxes,
     solve_assignment,
 )
 
@@ -549,6 +550,7 @@ def test_assignment_rejects_bad_costs() -> None:
         ({"box_px": (0.0, 0.0, math.nan, 5.0)}, "box_px"),
         ({"box_px": (0.0, 0.0, 5.0)}, "box_px"),
         ({"source_index": -1}, "source_index"),
+        ({"for_track": "7"}, "for_track"),
     ],
 )
 def test_bad_measurement_names_the_field(change: dict[str, object], field: str) -> None:
@@ -639,3 +641,54 @@ def test_only_confirmed_coasting_boxes_in_front_of_the_camera_move() -> None:
         _track(3, -4.0, misses=1),  # behind the camera
     )
     assert coasting_boxes(TrackResult(kept, ()), FLAT_CAMERA).tracks == kept
+
+
+# --- detections searched for a track (core.track_search) ------------------------------------
+
+
+def _confirmed_pair() -> tuple[Tracker, dict[int, Track]]:
+    """Two parked cars 20 m ahead, 3.5 m apart across, confirmed over confirm_frames."""
+    tracker = Tracker(P)
+    for _ in range(P.confirm_frames):
+        result = tracker.update([_m(20.0, 0.0, 0), _m(20.0, 3.5, 1)], STILL, DT_S)
+    return tracker, _by_source(result)
+
+
+def test_a_searched_detection_goes_to_its_track_and_does_not_measure_distance() -> None:
+    tracker, before = _confirmed_pair()
+    ahead = {t.id: t for t in tracker.predicted("vehicle", STILL, DT_S)}
+    near, far = before[0].id, before[1].id
+    # searched for the far track, at its predicted distance, 0.2 m nearer the other car
+    searched = Measurement("vehicle", ahead[far].x_m, 3.3, 1.8, (0.0, 0.0, 9.0, 9.0), 0, far)
+    result = {t.id: t for t in tracker.update([searched], STILL, DT_S).tracks}
+    assert result[far].source_index == 0 and result[far].misses == 0
+    assert result[far].unreturned == 1
+    assert result[far].x_m == pytest.approx(ahead[far].x_m, abs=1e-6)  # x left as predicted
+    assert 3.3 < result[far].y_m < 3.5  # y measured
+    assert result[far].box_px == (0.0, 0.0, 9.0, 9.0)
+    assert result[near].misses == 1 and result[near].unreturned == 1
+    # radar-backed again: unreturned starts over
+    result = {t.id: t for t in tracker.update([_m(20.0, 3.5)], STILL, DT_S).tracks}
+    assert result[far].unreturned == 0 and result[near].unreturned == 2
+
+
+def test_a_searched_detection_never_starts_a_track_or_goes_to_another() -> None:
+    tracker, before = _confirmed_pair()
+    ids = sorted(t.id for t in before.values())
+    # for a track that does not exist, and for one whose gates it misses by far
+    lost = Measurement("vehicle", 20.0, 0.0, 1.8, (0.0, 0.0, 1.0, 1.0), 0, 99)
+    beyond = Measurement("vehicle", 20.0, 30.0, 1.8, (0.0, 0.0, 1.0, 1.0), 1, ids[0])
+    result = tracker.update([lost, beyond], STILL, DT_S)
+    assert sorted(t.id for t in result.tracks) == ids
+    assert all(t.misses == 1 for t in result.tracks)
+
+
+def test_expected_boxes_are_the_coasting_geometry() -> None:
+    ahead, behind, flat = _track(1, 20.0, 0), _track(2, -4.0, 0), _track(3, 20.0, 0)
+    flat = dataclasses.replace(flat, box_px=(5.0, 5.0, 5.0, 9.0))  # no width to scale
+    assert expected_boxes([ahead, behind, flat], FLAT_CAMERA) == [
+        pytest.approx((250.0, 285.5 - 52.5, 320.0, 285.5)),
+        None,
+        None,
+    ]
+    assert expected_boxes([], FLAT_CAMERA) == []
