@@ -28,14 +28,18 @@ filter (a random walk).
    nu^T S^-1 nu + ln det S, twice the innovation's negative log-likelihood less a constant
    (`likelihood_cost`; without it nu^T S^-1 nu alone): an uncertain track, a newborn one
    whose speed is unknown, pays for its large S and does not take the detection a confirmed
-   track predicted well.
+   track predicted well. A detection searched for a track (`Measurement.for_track`,
+   `core.track_search`) takes no part: it goes to that track when the track is left free
+   and within its gates, else to none.
 4. update, Kalman with z = (x_m, y_m), Joseph form. Measurement sigmas per kind: vehicles
    radar distance `radar_sigma_x_m` and vision lateral `vision_sigma_y_m`; pedestrians
    distance from the foot row `pedestrian_sigma_x_fraction` * x (at least
    `pedestrian_min_sigma_x_m`) and `vision_sigma_y_m`; guard rails `radar_sigma_x_m` and
-   `guard_rail_sigma_y_m`. Width: sigma `width_sigma_m`.
-5. lifecycle: an unmatched measurement starts a tentative track (its position and width
-   measured, speed 0 with sigma `initial_velocity_sigma_mps`, id = the next integer). A track
+   `guard_rail_sigma_y_m`. Width: sigma `width_sigma_m`. A searched detection's x_m is the
+   track's prediction, not a measurement: its x variance is UNMEASURED_VAR_M2.
+5. lifecycle: an unmatched measurement (not a searched one) starts a tentative track (its
+   position and width measured, speed 0 with sigma `initial_velocity_sigma_mps`, id = the
+   next integer). A track
    is confirmed once it has `confirm_frames` hits and stays confirmed. A tentative track is
    dropped at its (`tentative_max_missed_frames` + 1)-th consecutive miss, so a one-frame
    false positive is never confirmed, while a vehicle detected on two frames of three is;
