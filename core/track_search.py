@@ -69,7 +69,7 @@ from core.io.frame import RadarTarget
 from core.params import VehicleParams
 from core.search_area import intersection_area, rect_area, search_areas
 from core.tracking import Track, expected_boxes
-from core.vehicle import Vehicle, VehicleResult, detect_vehicles
+from core.vehicle import Vehicle, VehicleResult, detect_vehicles, overlap_of_smaller
 
 # Step 2: a detected vehicle hides a track's box only when it is nearer by more than this.
 NEARER_GAP_M = 1.0
@@ -175,8 +175,7 @@ def search_tracks(
             and abs(v.width_m - tracks[i].width_m) <= agreement
         ]
         overlapping = any(
-            intersection_area(v.box_px, f.box_px)
-            > params.merge_overlap_fraction * min(rect_area(v.box_px), rect_area(f.box_px))
+            overlap_of_smaller(v.box_px, f.box_px) > params.merge_overlap_fraction
             for f in found.vehicles
         )
         if agreeing and not overlapping:

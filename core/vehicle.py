@@ -361,7 +361,8 @@ def _vehicle_wide(width_m: float, params: VehicleParams) -> bool:
     return params.min_width_m <= width_m <= params.max_width_m
 
 
-def _overlap_of_smaller(a: Box, b: Box) -> float:
+def overlap_of_smaller(a: Box, b: Box) -> float:
+    """The share of the smaller of two image boxes that the other covers."""
     return intersection_area(a, b) / max(min(rect_area(a), rect_area(b)), 1e-9)
 
 
@@ -386,7 +387,7 @@ def merge_boxes(
             ):
                 continue
             ref = _mean_box(members)
-            if _overlap_of_smaller(ref, box) <= params.merge_overlap_fraction:
+            if overlap_of_smaller(ref, box) <= params.merge_overlap_fraction:
                 continue
             w_ref, w_box = ref[2] - ref[0], box[2] - box[0]
             h_ref = ref[3] - ref[1]
