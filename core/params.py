@@ -349,6 +349,11 @@ class GuardRailParams:
     max_angle_rad: float = math.radians(45.0)
     # overlapping boxes management (paper 002, III); False: every slow area is searched
     manage_overlaps: bool = True
+    # beyond the paper (core/guardrail.py, step 6): an area the rail's area covers is labelled
+    # by overlap only when its target lies within overlap_gate_m across of the rail's target,
+    # and searched otherwise (a parked car or a sign beside the rail); 0: no gate (the
+    # papers' preset)
+    overlap_gate_m: float = 1.0
     # beyond the paper (core/guardrail.py, step 5): the line must pass the target at least
     # this high above the road, not along it (kerbs, lane edges, shadows, a parked car's
     # sill); the papers' preset: -100 (no test)
@@ -371,6 +376,12 @@ class GuardRailParams:
             self.line_memory_s,
         )
         _check(self.max_holes >= 0, "max_holes", "an integer >= 0", self.max_holes)
+        _check(
+            math.isfinite(self.overlap_gate_m) and self.overlap_gate_m >= 0,
+            "overlap_gate_m",
+            "a distance >= 0 (0: no gate)",
+            self.overlap_gate_m,
+        )
         _fraction(self, "min_length_fraction", "overlap_fraction")
         _check(
             math.isfinite(self.min_line_height_m),

@@ -398,6 +398,28 @@ def test_overlapping_areas_are_labelled_after_one_search() -> None:
     assert b.line_px.shape == (0, 2) and b.holes_px.shape == (0, 2)
 
 
+def test_a_covered_area_off_the_rail_is_searched_and_the_chain_goes_on() -> None:
+    a = chain_areas()
+    # B's target stands 2 m further out than the rail's (a parked car beside it)
+    beside = dataclasses.replace(a["B"], target=static_target(12.0, 6.0, 20.0))
+    result = detect_guard_rails((a["A"], beside, a["C"]), 20.0, PARAMS)
+    assert PARAMS.overlap_gate_m < 2.0
+    assert [c.target_index for c in result.checks] == [0, 1, 2]
+    assert [c.verdict for c in result.checks] == ["guard_rail", "not_guard_rail", "overlap"]
+    assert [c.overlapped_by for c in result.checks] == [None, None, 0]
+    assert result.searched == 2
+    # without the gate (the papers' preset) the chain labels it unsearched
+    no_gate = dataclasses.replace(PARAMS, overlap_gate_m=0.0)
+    result = detect_guard_rails((a["A"], beside, a["C"]), 20.0, no_gate)
+    assert [c.verdict for c in result.checks] == ["guard_rail", "overlap", "overlap"]
+
+
+@pytest.mark.parametrize("gate_m", [-1.0, math.inf, math.nan])
+def test_a_bad_overlap_gate_is_refused(gate_m: float) -> None:
+    with pytest.raises(ValueError, match="overlap_gate_m"):
+        GuardRailParams(overlap_gate_m=gate_m)
+
+
 def test_without_overlap_management_every_slow_area_is_searched() -> None:
     a = chain_areas()
     off = dataclasses.replace(PARAMS, manage_overlaps=False)
