@@ -148,10 +148,11 @@ def bird_eye_geometry(
 
     result: the frame; params: the parameters it was computed with (the ground texture
     covers `bird_eye_extent_m(params.motion_stereo)`); offset_y_m: added to every y; layers:
-    the camera's layers, of which the view follows five: `radar` (the markers), `vehicles`
+    the camera's layers, of which the view follows six: `radar` (the markers), `vehicles`
     (the boxes), `guardrails` (the rail lines), `tracks` (trail and label of each track
-    measured this frame) and `coasting` (those of the tracks missed this frame). ValueError
-    when offset_y_m is not finite.
+    measured this frame), `coasting` (those of the tracks missed this frame) and `confirmed`
+    (the boxes of the vehicle tracks measured this frame, and the trails and labels of the
+    vehicle and pedestrian ones). ValueError when offset_y_m is not finite.
     """
     if not math.isfinite(offset_y_m):
         raise ValueError(f"offset_y_m: expected a finite number of metres, got {offset_y_m}")
@@ -161,17 +162,27 @@ def bird_eye_geometry(
     radar_points = _points([(t.target.x_m, t.target.y_m + dy, RADAR_MARKER_Z_M) for t in targets])
     radar_colours = _colours([radar_colour(t.verdict) for t in targets])
 
-    vehicles = result.vehicle.vehicles if layers.vehicles else ()
+    # (distance, lateral, width) of the boxes: the frame's vehicles, the confirmed tracks
+    vehicles = [
+        (v.distance_m, v.lateral_m, v.width_m)
+        for v in (result.vehicle.vehicles if layers.vehicles else ())
+    ]
+    vehicles += [
+        (t.x_m, t.y_m, t.width_m)
+        for t in (result.tracked_vehicles if layers.confirmed else ())
+        if t.misses == 0
+    ]
     length, height = VEHICLE_FOOTPRINT_LENGTH_M, VEHICLE_HEIGHT_M
-    centres = _points([(v.distance_m + length / 2, v.lateral_m + dy, height / 2) for v in vehicles])
-    sizes = _points([(length, v.width_m, height) for v in vehicles])
+    centres = _points([(x + length / 2, y + dy, height / 2) for x, y, _ in vehicles])
+    sizes = _points([(length, w, height) for _, _, w in vehicles])
 
     segments: list[tuple[tuple[float, float, float], tuple[float, float, float]]] = []
     segment_colours: list[Rgb] = []
     labels: list[tuple[float, float, float]] = []
     texts: list[str] = []
     for track in result.tracking.confirmed:
-        if not (layers.coasting if track.misses else layers.tracks):
+        demo = layers.confirmed and track.kind != "guard_rail"  # as the camera's confirmed
+        if not (layers.coasting if track.misses else layers.tracks or demo):
             continue
         steps = zip(track.history_m[:-1], track.history_m[1:], strict=True)
         for (x0, y0), (x1, y1) in steps:

@@ -70,6 +70,11 @@ LEGEND: Mapping[str, tuple[LegendItem, ...]] = {
         LegendItem("missed tag", overlays.VEHICLE_COLOUR, "followed, not seen in this frame"),
     ),
     "truth": (LegendItem("box", draw.CLASS_COLOURS["car"], "ground truth"),),
+    "confirmed": (
+        LegendItem("box", overlays.VEHICLE_COLOUR, "vehicle, confirmed over several frames"),
+        LegendItem("box", overlays.PEDESTRIAN_COLOUR, "pedestrian, confirmed over several frames"),
+        LegendItem("tag", overlays.VEHICLE_COLOUR, "the same object followed over time"),
+    ),
 }
 # the "tag" marks: a track's tag as `app.overlays.put_track_ids` draws it, seen this frame or not
 TAG_TEXTS: Mapping[Mark, str] = {"tag": "#7", "missed tag": "#7 ?"}

@@ -378,6 +378,24 @@ def put_track_ids(out: RgbImage, tracks: Sequence[Track], coasting: bool = False
             _tag(out, text, u, bottom, colour)
 
 
+def put_confirmed_tracks(out: RgbImage, tracks: Sequence[Track]) -> None:
+    """In place: the box of each confirmed vehicle or pedestrian track measured this frame
+    (`VEHICLE_COLOUR`, `PEDESTRIAN_COLOUR`, as `put_vehicle_boxes` and `put_pedestrians`
+    draw them), tagged with its id (`put_track_ids`); tracks missed this frame, tentative
+    ones and guard-rail tracks are not drawn.
+
+    tracks: e.g. `FrameResult.tracked_vehicles + FrameResult.tracked_pedestrians`.
+    """
+    require_rgb_image("out", out)
+    shown = [t for t in tracks if t.confirmed and t.misses == 0 and t.kind != "guard_rail"]
+    for t in shown:
+        if t.kind == "vehicle":
+            _outline(out, t.box_px, VEHICLE_COLOUR, BOX_THICKNESS_PX)
+        else:  # a pedestrian's box has exclusive ends, as its candidate's
+            _outline(out, exclusive_to_edges(t.box_px), PEDESTRIAN_COLOUR, BOX_THICKNESS_PX)
+    put_track_ids(out, shown)
+
+
 def _overlap(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> bool:
     """Whether two (u0, v0, u1, v1) rectangles share a pixel."""
     return a[0] <= b[2] and b[0] <= a[2] and a[1] <= b[3] and b[1] <= a[3]
@@ -433,6 +451,10 @@ def _coasting_layer(out: RgbImage, r: FrameResult) -> None:
     put_track_ids(out, r.tracked_vehicles + r.tracked_pedestrians, coasting=True)
 
 
+def _confirmed_layer(out: RgbImage, r: FrameResult) -> None:
+    put_confirmed_tracks(out, r.tracked_vehicles + r.tracked_pedestrians)
+
+
 # In drawing order, back to front: the strip first, text last.
 LAYERS: Mapping[str, Layer] = {
     "pedestrian strip": _strip_layer,
@@ -443,6 +465,7 @@ LAYERS: Mapping[str, Layer] = {
     "rejected": _rejected_layer,
     "pedestrians": _pedestrians_layer,
     "vehicles": _vehicles_layer,
+    "confirmed tracks": _confirmed_layer,
     "radar": _radar_layer,
     "tracks": _tracks_layer,
     "coasting tracks": _coasting_layer,

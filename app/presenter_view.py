@@ -36,18 +36,19 @@ SEPARATOR = "   |   "
 class HeadlineFigures:
     """The figures of one frame a presenter shows large."""
 
-    vehicles: int  # vehicles confirmed by radar and vision in this frame
-    pedestrians: int  # pedestrians kept in this frame
-    nearest_vehicle_m: float | None  # radar distance of the nearest vehicle; None: none
+    vehicles: int  # confirmed vehicle tracks measured in this frame
+    pedestrians: int  # confirmed pedestrian tracks measured in this frame
+    nearest_vehicle_m: float | None  # distance of the nearest of those vehicles; None: none
     processing_ms: float  # the engine's time on this frame, all stages
 
 
 def headline_figures(result: FrameResult) -> HeadlineFigures:
-    vehicles = result.vehicle.vehicles
-    nearest = min((v.distance_m for v in vehicles), default=None)
-    return HeadlineFigures(
-        len(vehicles), len(result.pedestrian.kept), nearest, result.timings.total_ms
-    )
+    """The figures of `result`: what the demo layers draw (`app.state.DEMO_LAYERS`), the
+    confirmed tracks measured this frame, never a single frame's proposals."""
+    vehicles = [t for t in result.tracked_vehicles if t.misses == 0]
+    pedestrians = [t for t in result.tracked_pedestrians if t.misses == 0]
+    nearest = min((t.x_m for t in vehicles), default=None)
+    return HeadlineFigures(len(vehicles), len(pedestrians), nearest, result.timings.total_ms)
 
 
 def figures_lines(figures: HeadlineFigures) -> tuple[str, str]:

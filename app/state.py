@@ -30,6 +30,9 @@ class Layers:
     tracks: bool = True  # the ids of the tracks measured this frame
     coasting: bool = True  # the ids of the tracks missed this frame ("#id ?"), at their last box
     truth: bool = False  # ground truth, when the drive has it
+    # the confirmed tracks measured this frame, boxed with their ids: what a demo shows
+    # (what was found and confirmed over frames, nothing a single frame proposed)
+    confirmed: bool = False
 
     @staticmethod
     def names() -> tuple[str, ...]:
@@ -38,20 +41,22 @@ class Layers:
 
 INSPECTOR_LAYERS = Layers()  # what the inspector opens with
 
-# what a demo draws (the presenter, an exported video): what was found, not how
+# what a demo draws (the presenter, an exported video): what was found and confirmed over
+# frames, not how: no single frame's proposals (raw boxes, radar verdicts, guard-rail lines)
 DEMO_LAYERS = Layers(
-    radar=True,
+    radar=False,
     areas=False,
-    vehicles=True,
-    guardrails=True,
-    pedestrians=True,
+    vehicles=False,
+    guardrails=False,
+    pedestrians=False,
     rejected=False,
     pruned=False,
     strip=False,
     horizon=False,
-    tracks=True,
-    coasting=False,  # a tag without a box, for someone who never read the papers
+    tracks=False,
+    coasting=False,
     truth=False,
+    confirmed=True,
 )
 
 

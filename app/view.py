@@ -62,6 +62,7 @@ OVERLAY_OF_LAYER = {
     "horizon": "pitch",
     "tracks": "tracks",
     "coasting": "coasting tracks",
+    "confirmed": "confirmed tracks",
 }
 
 

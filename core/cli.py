@@ -870,8 +870,8 @@ def _add_export_video(sub: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "--layers",
         metavar="NAMES",
         help="comma-separated overlays to draw, the others off, e.g. radar,vehicles,guardrails "
-        "(a name not known lists them all; default: what was found: radar, vehicles, "
-        "guardrails, pedestrians, tracks)",
+        "(a name not known lists them all; default: what was found and confirmed over "
+        "frames: confirmed, the confirmed tracks measured in each frame, with their ids)",
     )
     video.add_argument(
         "--gif-width",

@@ -140,6 +140,23 @@ def test_vehicle_is_a_box_from_its_radar_distance_away_as_wide_as_vision_saw_it(
     np.testing.assert_allclose(near_bottom, [(20.0, 0.2, 0.0)])  # rear at the radar, on the road
 
 
+def test_the_confirmed_layer_boxes_the_vehicle_tracks_measured_this_frame() -> None:
+    tracks = [
+        track(7, "vehicle", ((18.0, 0.5), (20.0, 1.0))),
+        track(8, "vehicle", ((30.0, -3.0),), misses=1),
+        track(9, "vehicle", ((40.0, 3.0),), confirmed=False),
+        track(10, "pedestrian", ((9.0, -2.0),)),
+        track(11, "guard_rail", ((12.0, 6.0), (11.0, 6.0))),
+    ]
+    only = dataclasses.replace(DEMO_LAYERS, confirmed=True)
+    g = bird_eye_geometry(frame(vehicles=[car(25.0, 0.0, 1.7)], tracks=tracks), PARAMS, layers=only)
+    np.testing.assert_allclose(g.vehicle_centres_m, [(20.0 + LENGTH_M / 2, 1.0, HEIGHT_M / 2)])
+    np.testing.assert_allclose(g.vehicle_sizes_m, [(LENGTH_M, 1.8, HEIGHT_M)])  # its width
+    assert g.label_texts == ("#7", "#10")  # measured and confirmed, not the guard rail's
+    np.testing.assert_array_equal(g.track_colours, [overlays.VEHICLE_COLOUR])
+    assert len(g.radar_points_m) == 0  # the frame's own proposals are not drawn
+
+
 def test_track_history_gives_one_segment_per_step_and_a_label_over_its_position() -> None:
     history = ((10.0, 1.0), (12.0, 1.5), (14.0, 2.0))
     g = bird_eye_geometry(frame(tracks=[track(7, "vehicle", history)]), PARAMS)

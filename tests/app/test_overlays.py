@@ -410,6 +410,29 @@ def test_guard_rail_tracks_get_no_tag() -> None:
     ).any()
 
 
+def test_confirmed_tracks_measured_this_frame_are_boxed_with_their_ids() -> None:
+    vehicle_box = (100.0, 200.0, 180.0, 260.0)
+    person_box = (400.0, 200.0, 420.0, 260.0)  # exclusive ends, as a pedestrian candidate's
+    tentative = dataclasses.replace(track("vehicle", (300.0, 100.0, 340.0, 140.0)), confirmed=False)
+    tracks = [
+        track("vehicle", vehicle_box, id_=7),
+        track("pedestrian", person_box, id_=8),
+        track("vehicle", (500.0, 100.0, 540.0, 140.0), misses=1, id_=9),
+        tentative,
+        track("guard_rail", (10.0, 10.0, 60.0, 60.0), id_=10),
+    ]
+    out = drawn(overlays.put_confirmed_tracks, black(), tracks)
+    # the vehicle's box on its edge pixels, the pedestrian's on its last pixels
+    assert is_colour(out[200, 100:181], overlays.VEHICLE_COLOUR).all()
+    assert is_colour(out[200, 400:420], overlays.PEDESTRIAN_COLOUR).all()
+    assert not is_colour(out[200, 420:422], overlays.PEDESTRIAN_COLOUR).any()
+    # their ids under the boxes, as put_track_ids places them
+    tags = drawn(overlays.put_track_ids, black(), tracks[:2])
+    np.testing.assert_array_equal(out[262:], tags[262:])
+    # nothing for the missed, the tentative and the guard-rail tracks
+    assert not out[:150, 280:].any() and not out[:70, :70].any()
+
+
 # --- all layers of an engine frame, bad inputs ---------------------------------------------
 
 

@@ -24,26 +24,40 @@ from app.presenter_view import (
     headline_figures,
     with_figures,
 )
-from app.state import DEMO_LAYERS
+from app.state import DEMO_LAYERS, Layers
 
 
-def test_the_presenter_draws_what_was_found_and_its_legend_says_it_in_plain_words() -> None:
+def test_the_presenter_draws_what_was_confirmed_and_its_legend_says_it_in_plain_words() -> None:
     words = {item.words for item in legend_items(DEMO_LAYERS)}
-    assert "vehicle confirmed by radar and vision" in words and "pedestrian" in words
-    assert "radar target discarded (no vehicle)" in words and "guard rail" in words
-    assert not DEMO_LAYERS.rejected and not DEMO_LAYERS.horizon
+    assert "vehicle, confirmed over several frames" in words
+    assert "pedestrian, confirmed over several frames" in words
+    assert "the same object followed over time" in words
+    # no single frame's proposals: raw boxes, radar verdicts, guard-rail lines, how it works
+    assert DEMO_LAYERS.confirmed
+    on = {name for name in Layers.names() if getattr(DEMO_LAYERS, name)}
+    assert on == {"confirmed"}
 
 
-def test_the_figures_are_the_frames_vehicles_pedestrians_and_time() -> None:
+def test_the_figures_count_the_confirmed_tracks_measured_this_frame() -> None:
     result = engine_result()
     figures = headline_figures(result)
-    vehicles = result.vehicle.vehicles
+    vehicles = [t for t in result.tracked_vehicles if t.misses == 0]
     assert figures.vehicles == len(vehicles) > 0
-    assert figures.nearest_vehicle_m == min(v.distance_m for v in vehicles)
-    assert figures.pedestrians == len(result.pedestrian.kept)
+    assert figures.nearest_vehicle_m == min(t.x_m for t in vehicles)
+    pedestrians = [t for t in result.tracked_pedestrians if t.misses == 0]
+    assert figures.pedestrians == len(pedestrians)
     assert figures.processing_ms == result.timings.total_ms
-    empty = dataclasses.replace(result, vehicle=dataclasses.replace(result.vehicle, vehicles=()))
+    # a track missed this frame, or one not yet confirmed, is not counted
+    measured = vehicles[0]
+    for other in (
+        dataclasses.replace(measured, misses=1),
+        dataclasses.replace(measured, confirmed=False),
+    ):
+        tracking = dataclasses.replace(result.tracking, tracks=(measured, other))
+        assert headline_figures(dataclasses.replace(result, tracking=tracking)).vehicles == 1
+    empty = dataclasses.replace(result, tracking=dataclasses.replace(result.tracking, tracks=()))
     assert headline_figures(empty).nearest_vehicle_m is None
+    assert headline_figures(empty).vehicles == 0 < len(result.vehicle.vehicles)
 
 
 def test_the_figures_read_as_words() -> None:

@@ -11,8 +11,9 @@ def test_state_starts_at_frame_zero_paused_with_the_papers_parameters() -> None:
     assert (state.frame, state.playing) == (0, False)
     assert state.layers.radar and state.layers.vehicles and state.layers.horizon
     assert not state.layers.truth  # the engine's output first; truth on request
+    assert not state.layers.confirmed  # the demo's picture; the frame's own detections first
     assert state.params == Params()
-    assert Layers.names()[0] == "radar" and len(Layers.names()) == 12
+    assert Layers.names()[0] == "radar" and len(Layers.names()) == 13
 
 
 def test_negative_frame_is_refused() -> None:
