@@ -104,6 +104,26 @@ def put_tag(
     cv2.putText(out, text, (u_px + 1, top + h), FONT, font_scale, text_colour, 1, cv2.LINE_AA)
 
 
+def put_dashed_rectangle(
+    out: RgbImage,
+    corner0_px: tuple[int, int],
+    corner1_px: tuple[int, int],
+    colour: Rgb,
+    dash_px: int = 6,
+) -> None:
+    """In place: a one-pixel rectangle outline between pixel corners (u0, v0) and (u1, v1),
+    inclusive, drawn `dash_px` pixels on and `dash_px` off along each side from its corners."""
+    (u0, v0), (u1, v1) = corner0_px, corner1_px
+    sides = ((u0, u1, v0, True), (u0, u1, v1, True), (v0, v1, u0, False), (v0, v1, u1, False))
+    for a, b, fixed, horizontal in sides:
+        for start in range(a, b + 1, 2 * dash_px):
+            end = min(start + dash_px - 1, b)
+            p0, p1 = (
+                ((start, fixed), (end, fixed)) if horizontal else ((fixed, start), (fixed, end))
+            )
+            cv2.line(out, p0, p1, colour, 1)
+
+
 def put_road_crosses(
     out: RgbImage,
     road_points_m: Sequence[tuple[float, float]],

@@ -30,7 +30,7 @@ SWATCH_INSET_PX = 4  # a box mark's top and bottom from its line's
 MARGIN_PX = draw.TEXT_MARGIN_PX
 MIN_WIDTH_PX = 16
 
-Mark = Literal["box", "cross", "line", "fill", "tag", "missed tag"]
+Mark = Literal["box", "dashed box", "cross", "line", "fill", "tag", "missed tag"]
 
 
 @dataclass(frozen=True)
@@ -47,6 +47,9 @@ class LegendItem:
 LEGEND: Mapping[str, tuple[LegendItem, ...]] = {
     "vehicles": (
         LegendItem("box", overlays.VEHICLE_COLOUR, "vehicle confirmed by radar and vision"),
+        LegendItem(
+            "dashed box", overlays.VEHICLE_COLOUR, "vehicle vision found on a track, no radar"
+        ),
     ),
     "radar": (
         LegendItem("cross", overlays.RADAR_REFINED_COLOUR, "radar target that found the vehicle"),
@@ -62,7 +65,10 @@ LEGEND: Mapping[str, tuple[LegendItem, ...]] = {
     "pruned": (
         LegendItem("box", overlays.PEDESTRIAN_REJECTED_COLOUR, "pedestrian dropped by shape"),
     ),
-    "areas": (LegendItem("box", overlays.SEARCH_AREA_COLOUR, "radar search area"),),
+    "areas": (
+        LegendItem("box", overlays.SEARCH_AREA_COLOUR, "radar search area"),
+        LegendItem("dashed box", overlays.SEARCH_AREA_COLOUR, "area searched for a track, #id"),
+    ),
     "strip": (LegendItem("fill", overlays.STRIP_GREY, "pedestrian search strip"),),
     "horizon": (LegendItem("line", draw.HORIZON_COLOUR, "horizon"),),
     "tracks": (LegendItem("tag", overlays.VEHICLE_COLOUR, "the same object followed over time"),),
@@ -126,6 +132,10 @@ def _draw_mark(out: draw.RgbImage, item: LegendItem, x: int, top: int) -> None:
     if item.mark == "box":
         y0, y1 = top + SWATCH_INSET_PX, top + LEGEND_LINE_PX - 1 - SWATCH_INSET_PX
         cv2.rectangle(out, (x, y0), (x1, y1), item.colour, overlays.BOX_THICKNESS_PX)
+    elif item.mark == "dashed box":
+        y0, y1 = top + SWATCH_INSET_PX, top + LEGEND_LINE_PX - 1 - SWATCH_INSET_PX
+        for k in range(overlays.BOX_THICKNESS_PX):
+            draw.put_dashed_rectangle(out, (x + k, y0 + k), (x1 - k, y1 - k), item.colour, 3)
     elif item.mark == "fill":
         y0, y1 = top + SWATCH_INSET_PX, top + LEGEND_LINE_PX - 1 - SWATCH_INSET_PX
         cv2.rectangle(out, (x, y0), (x1, y1), item.colour, cv2.FILLED)

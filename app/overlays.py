@@ -38,6 +38,7 @@ from app.draw import (
     TEXT_COLOUR,
     Rgb,
     RgbImage,
+    put_dashed_rectangle,
     put_horizon,
     put_road_crosses,
     put_tag,
@@ -85,6 +86,9 @@ TAG_FONT_SCALE = 0.4
 INTERSECTION_RADIUS_PX = 3
 VP_CROSS_SIZE_PX = 18
 TRACK_TAG_GAP_PX = 2
+# dashes of what came without a radar return: vehicles vision found where a track expected
+# them, and the areas searched for them (`core.track_search`)
+DASH_PX = 6
 
 # Short words for the verdicts of pedestrian candidates (`core.pedestrian.Verdict`).
 PEDESTRIAN_REASONS: Mapping[str, str] = {
@@ -133,6 +137,15 @@ def _outline(out: RgbImage, box_edges_px: Box, colour: Rgb, thickness_px: int) -
         cv2.rectangle(out, (c0 + k, r0 + k), (c1 - k, r1 - k), colour, 1)
 
 
+def _dashed_outline(out: RgbImage, box_edges_px: Box, colour: Rgb, thickness_px: int) -> None:
+    """In place: `_outline` in dashes (`app.draw.put_dashed_rectangle`)."""
+    c0, r0, c1, r1 = box_pixels(box_edges_px)
+    for k in range(thickness_px):
+        if c0 + k > c1 - k or r0 + k > r1 - k:
+            break
+        put_dashed_rectangle(out, (c0 + k, r0 + k), (c1 - k, r1 - k), colour, DASH_PX)
+
+
 def _tag(
     out: RgbImage,
     text: str,
@@ -172,21 +185,34 @@ def put_radar_targets(out: RgbImage, targets: Sequence[TargetResult], camera: Ca
     )
 
 
-def put_search_areas(out: RgbImage, areas: Sequence[SearchArea]) -> None:
+def put_search_areas(
+    out: RgbImage,
+    areas: Sequence[SearchArea],
+    searched: Sequence[tuple[SearchArea, int]] = (),
+) -> None:
     """In place: the cropped search area of each radar target (`SearchArea.box_px`), one
-    pixel thick."""
+    pixel thick, in `SEARCH_AREA_COLOUR`; and in dashes, tagged "#id", each area searched for
+    a track that no radar target returned (`core.track_search`).
+
+    areas: `FrameResult.areas`; searched: (area, track id) pairs.
+    """
     require_rgb_image("out", out)
     for area in areas:
         c0, r0, c1, r1 = area.box_px
         _outline(out, exclusive_to_edges((c0, r0, c1, r1)), SEARCH_AREA_COLOUR, 1)
+    for area, track_id in searched:
+        c0, r0, c1, r1 = area.box_px
+        _dashed_outline(out, exclusive_to_edges((c0, r0, c1, r1)), SEARCH_AREA_COLOUR, 1)
+        _tag(out, f"#{track_id}", c0, r0 - 1, SEARCH_AREA_COLOUR)
 
 
 def put_vehicle_boxes(
     out: RgbImage, vehicles: Sequence[Vehicle], targets: Sequence[TargetResult] = ()
 ) -> None:
-    """In place: the final vehicles' boxes in `VEHICLE_COLOUR`, and the boxes the size
-    filter dropped (targets with verdict "size_filter") in `VEHICLE_REJECTED_COLOUR` tagged
-    "size".
+    """In place: the final vehicles' boxes in `VEHICLE_COLOUR` (in dashes those without a
+    radar target, found where a track expected them: `core.track_search`), and the boxes the
+    size filter dropped (targets with verdict "size_filter") in `VEHICLE_REJECTED_COLOUR`
+    tagged "size".
 
     vehicles: `VehicleResult.vehicles`; targets: `VehicleResult.targets`.
     """
@@ -198,7 +224,8 @@ def put_vehicle_boxes(
             c0, r0, _, _ = box_pixels(box)
             _tag(out, "size", c0, r0 - 1, VEHICLE_REJECTED_COLOUR)
     for v in vehicles:
-        _outline(out, v.box_px, VEHICLE_COLOUR, BOX_THICKNESS_PX)
+        outline = _outline if v.target_indices else _dashed_outline
+        outline(out, v.box_px, VEHICLE_COLOUR, BOX_THICKNESS_PX)
 
 
 # --- guard rails (paper 002) ----------------------------------------------------------------
@@ -411,7 +438,9 @@ def _radar_layer(out: RgbImage, r: FrameResult) -> None:
 
 
 def _areas_layer(out: RgbImage, r: FrameResult) -> None:
-    put_search_areas(out, r.areas)
+    search = r.track_search
+    pairs = zip((t.area for t in search.search.targets), search.track_ids, strict=True)
+    put_search_areas(out, r.areas, [(a, i) for a, i in pairs if a is not None])
 
 
 def _vehicles_layer(out: RgbImage, r: FrameResult) -> None:

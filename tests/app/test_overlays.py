@@ -201,6 +201,24 @@ def test_vehicle_box_draws_exactly_its_outline_in_the_vehicle_colour() -> None:
     assert not out[~expected].any()
 
 
+def test_a_vehicle_without_radar_and_a_searched_area_are_drawn_in_dashes() -> None:
+    searched = dataclasses.replace(vehicle((99.5, 199.5, 180.5, 260.5)), target_indices=())
+    out = drawn(overlays.put_vehicle_boxes, black(), [searched])
+    solid = ring(100, 200, 180, 260, overlays.BOX_THICKNESS_PX)
+    dashes = is_colour(out, overlays.VEHICLE_COLOUR)
+    assert not out[~solid].any()  # on the outline only
+    # dash_px on from each corner, dash_px off
+    d = overlays.DASH_PX
+    assert dashes[200, 100 : 100 + d].all() and not dashes[200, 100 + d : 100 + 2 * d].any()
+    assert dashes[200 : 200 + d, 180].all() and not dashes[200 + d : 200 + 2 * d, 180].any()
+    assert 0.4 < np.count_nonzero(dashes) / np.count_nonzero(solid) < 0.65
+    # an area searched for track 12: dashed, tagged with the id above it
+    out = drawn(overlays.put_search_areas, black(), [], [(area((100, 200, 160, 230)), 12)])
+    grey = is_colour(out, overlays.SEARCH_AREA_COLOUR)
+    assert grey[200, 100 : 100 + d].all() and not grey[200, 100 + d : 100 + 2 * d].any()
+    assert grey[185:199, 100:120].any()  # the "#12" tag
+
+
 def test_box_pixels_hold_the_edges_of_a_box() -> None:
     assert overlays.box_pixels((99.5, 199.5, 180.5, 260.5)) == (100, 200, 180, 260)
     assert overlays.box_pixels((100.2, 200.0, 179.9, 259.6)) == (100, 200, 180, 260)
