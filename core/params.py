@@ -209,6 +209,12 @@ class VehicleParams:
     # chi stays below the threshold for windows narrower than this (paper 001: "low for
     # narrow area widths"): poles, posts and gaps are not vehicles
     narrow_width_m: float = 0.4
+    # beyond the papers (core/vehicle.py Notes, step 6): mirrored pairs at the vehicle's
+    # half-width (give or take a column) per row of the area, at least; a vehicle's borders
+    # pair up about twice a row (a step is two Sobel columns), a box centred on a tree trunk
+    # or a post has borders only where the background happens to pair (0: off, the papers'
+    # preset)
+    min_border_pairs_per_row: float = 0.3
     # share of a box's columns with a shadow-to-road edge for its bottom (paper: "shadow";
     # no figure). A vehicle's shadow and wheels end on the road across its whole width; at
     # 0.5 (the papers' preset) rail posts, clutter and parts of vehicles passed too
@@ -250,6 +256,12 @@ class VehicleParams:
     min_image_px_per_m: float = 10.0
 
     def __post_init__(self) -> None:
+        _check(
+            math.isfinite(self.min_border_pairs_per_row) and self.min_border_pairs_per_row >= 0,
+            "min_border_pairs_per_row",
+            "a number of pairs per row >= 0 (0: off)",
+            self.min_border_pairs_per_row,
+        )
         _check(
             math.isfinite(self.min_image_px_per_m) and self.min_image_px_per_m >= 0,
             "min_image_px_per_m",

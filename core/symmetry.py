@@ -180,13 +180,15 @@ def candidate_axes(
     narrow_half_px: int,
     min_half_px: int,
     max_half_px: int,
+    min_border_pairs: int = 0,
 ) -> FloatArray:
     """Step 6: (C, 4) float64 rows (axis column a, half-width row k, chi, half_width_px) of
     the candidate axes, one per run of neighbouring axes that qualify.
 
     An axis qualifies when chi stays below `threshold` for half-widths < narrow_half_px and
     reaches it at the half-width in min_half_px .. max_half_px with the most pairs summed
-    with its neighbours (the first on ties); k: that half-width's row (half-width k + 1).
+    with its neighbours (the first on ties), and those pairs (the borders') number at least
+    min_border_pairs; k: that half-width's row (half-width k + 1).
     """
     n_rows, n_axes = chi.shape
     k_min, k_max = max(min_half_px, 1) - 1, min(max_half_px, n_rows)
@@ -204,7 +206,7 @@ def candidate_axes(
             near += pairs[k + 1, a] if k + 1 < n_rows else 0
             if near > best_near:
                 best_k, best_near = k, near
-        ok = ok and best_k >= 0 and chi[best_k, a] >= threshold
+        ok = ok and best_k >= 0 and chi[best_k, a] >= threshold and best_near >= min_border_pairs
         if not ok:
             run_open = False
             continue
@@ -275,6 +277,7 @@ def search(
     bottom_edge_fraction: float,
     top_edge_fraction: float,
     min_height_ratio: float,
+    min_border_pairs: int = 0,
 ) -> tuple[I8Array, F32Array, FloatArray, int]:
     """Steps 4-8 on one area: (edges (h, w), chi (max_half_width_px, 2 w - 1), candidates,
     chosen). candidates: (C, 6) float64 rows indexed by AXIS, ROW, CHI, HALF_PX, BOTTOM, TOP
@@ -284,7 +287,9 @@ def search(
     edges = signed_edges(sobel(patch, 1), edge_threshold)
     pairs, n = mirrored_pairs(edges, max_half_width_px)
     chi = chi_matrix(pairs, n)
-    axes = candidate_axes(chi, pairs, threshold, narrow_half_px, min_half_px, max_half_px)
+    axes = candidate_axes(
+        chi, pairs, threshold, narrow_half_px, min_half_px, max_half_px, min_border_pairs
+    )
     candidates = np.full((len(axes), 6), -1.0)
     candidates[:, :4] = axes
     chosen, nearest = -1, np.inf

@@ -276,6 +276,30 @@ def test_a_pole_is_bright_at_narrow_widths_and_no_vehicle() -> None:
     assert 64 not in candidate_axes(chi, pairs, 0.35 * 32, 3, 10, 32)[:, AXIS]  # a = 2 x 32
 
 
+def test_a_trunk_with_a_few_paired_background_edges_has_no_borders() -> None:
+    patch = np.full((32, 64), 160, dtype=np.uint8)
+    patch[:, 27:37] = 60  # a trunk 10 px wide: wider than the narrow widths
+    patch[:2, 12] = patch[:2, 51] = 220  # something paired about its axis on 2 rows only
+    edges = signed_vertical_edges(patch, PARAMS.edge_threshold)
+    pairs, n = mirrored_pairs(edges, 32)
+    chi = chi_matrix(pairs, n)
+    trunk_only = candidate_axes(chi, pairs, 0.35 * 32, 3, 10, 32)
+    assert 63 in trunk_only[:, AXIS]  # its axis (between columns 31 and 32) qualifies
+    # the "vehicle's" borders: 6 pairs on 32 rows, fewer than 0.3 a row
+    bordered = candidate_axes(chi, pairs, 0.35 * 32, 3, 10, 32, math.ceil(0.3 * 32))
+    assert 63 not in bordered[:, AXIS]
+    # a vehicle's borders pair up twice on every row (each step is two Sobel columns)
+    box = _box_edges(32, 64, 14, 50)
+    pairs, n = mirrored_pairs(box, 32)
+    assert len(candidate_axes(chi_matrix(pairs, n), pairs, 0.35 * 32, 3, 10, 32, 64)) == 1
+
+
+@pytest.mark.parametrize("value", [-0.1, math.nan, math.inf])
+def test_a_bad_border_pairs_floor_is_refused(value: float) -> None:
+    with pytest.raises(ParamsError, match="min_border_pairs_per_row"):
+        VehicleParams(min_border_pairs_per_row=value)
+
+
 @pytest.mark.parametrize("shape", [(1, 5), (5, 1), (2, 2), (32, 64), (70, 9)])
 def test_compiled_sobel_matches_opencv(shape: tuple[int, int]) -> None:
     patch = np.random.default_rng(shape[0] * 100 + shape[1]).integers(0, 256, shape, np.uint8)
