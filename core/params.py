@@ -220,6 +220,9 @@ class VehicleParams:
     # 0.5 (the papers' preset) rail posts, clutter and parts of vehicles passed too
     # (core/vehicle.py Notes, step 7)
     bottom_edge_fraction: float = 0.8
+    # beyond the papers (core/vehicle.py Notes, step 7): a box's base lies at most this high
+    # above the road at its target's distance (the papers' preset: 1000, anywhere in the area)
+    max_base_height_m: float = 0.3
     # share of a box's columns with a horizontal edge for its top
     top_edge_fraction: float = 0.5
     min_height_ratio: float = 0.5  # a top lies at least this x width above the bottom
@@ -270,6 +273,7 @@ class VehicleParams:
         )
         _positive(
             self,
+            "max_base_height_m",
             "search_width_m",
             "moving_search_width_m",
             "moving_speed_mps",

@@ -237,13 +237,15 @@ def box_rows(
     bottom_edge_fraction: float,
     top_edge_fraction: float,
     min_height_ratio: float,
+    highest_bottom: int = 0,
 ) -> tuple[int, int]:
     """Step 7 for columns col0 .. col1 - 1 of an area: (bottom, top) pixel-edge rows, -1
-    where none. d_down: the area's vertical Sobel derivative (positive: brighter below)."""
+    where none; a bottom above row `highest_bottom` is none. d_down: the area's vertical
+    Sobel derivative (positive: brighter below)."""
     h = d_down.shape[0]
     width = max(col1 - col0, 1)
     bottom = -1
-    for r in range(h - 1, -1, -1):
+    for r in range(h - 1, max(highest_bottom, 0) - 1, -1):
         count = 0
         for c in range(col0, col1):
             if d_down[r, c] > edge_threshold:
@@ -278,6 +280,7 @@ def search(
     top_edge_fraction: float,
     min_height_ratio: float,
     min_border_pairs: int = 0,
+    highest_bottom: int = 0,
 ) -> tuple[I8Array, F32Array, FloatArray, int]:
     """Steps 4-8 on one area: (edges (h, w), chi (max_half_width_px, 2 w - 1), candidates,
     chosen). candidates: (C, 6) float64 rows indexed by AXIS, ROW, CHI, HALF_PX, BOTTOM, TOP
@@ -308,6 +311,7 @@ def search(
                 bottom_edge_fraction,
                 top_edge_fraction,
                 min_height_ratio,
+                highest_bottom,
             )
             candidates[i, BOTTOM], candidates[i, TOP] = bottom, top
             if bottom >= 0 and abs(centre - centre_col_px) < nearest:

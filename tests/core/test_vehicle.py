@@ -18,6 +18,7 @@ from core.search_area import SearchArea, overlap_fraction, search_areas
 from core.symmetry import (
     AXIS,
     HALF_PX,
+    box_rows,
     candidate_axes,
     chi_matrix,
     mirrored_pairs,
@@ -292,6 +293,22 @@ def test_a_trunk_with_a_few_paired_background_edges_has_no_borders() -> None:
     box = _box_edges(32, 64, 14, 50)
     pairs, n = mirrored_pairs(box, 32)
     assert len(candidate_axes(chi_matrix(pairs, n), pairs, 0.35 * 32, 3, 10, 32, 64)) == 1
+
+
+def test_a_bottom_above_the_highest_allowed_row_is_no_bottom() -> None:
+    patch = np.full((32, 64), 200, dtype=np.uint8)
+    patch[:12, 16:48] = 40  # something dark ending on a bright band at row 12, across the box
+    d_down = sobel(patch, 0)
+    bottom, _ = box_rows(d_down, 16, 48, PARAMS.edge_threshold, 0.8, 0.5, 0.5)
+    assert bottom in (11, 12)  # the dark-to-bright edge
+    assert box_rows(d_down, 16, 48, PARAMS.edge_threshold, 0.8, 0.5, 0.5, bottom)[0] == bottom
+    assert box_rows(d_down, 16, 48, PARAMS.edge_threshold, 0.8, 0.5, 0.5, bottom + 1)[0] == -1
+
+
+@pytest.mark.parametrize("height_m", [0.0, -0.3, math.nan])
+def test_a_bad_base_height_is_refused(height_m: float) -> None:
+    with pytest.raises(ParamsError, match="max_base_height_m"):
+        VehicleParams(max_base_height_m=height_m)
 
 
 @pytest.mark.parametrize("value", [-0.1, math.nan, math.inf])
