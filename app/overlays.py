@@ -128,22 +128,25 @@ def exclusive_to_edges(box_px: Box) -> Box:
     return u0 - 0.5, v0 - 0.5, u1 - 0.5, v1 - 0.5
 
 
-def _outline(out: RgbImage, box_edges_px: Box, colour: Rgb, thickness_px: int) -> None:
-    """In place: `thickness_px` nested one-pixel rectangles from the box's edge pixels in."""
+def _outline(
+    out: RgbImage, box_edges_px: Box, colour: Rgb, thickness_px: int, dashed: bool = False
+) -> None:
+    """In place: `thickness_px` nested one-pixel rectangles from the box's edge pixels in,
+    in DASH_PX dashes when `dashed` (`app.draw.put_dashed_rectangle`)."""
     c0, r0, c1, r1 = box_pixels(box_edges_px)
     for k in range(thickness_px):
         if c0 + k > c1 - k or r0 + k > r1 - k:
             break
-        cv2.rectangle(out, (c0 + k, r0 + k), (c1 - k, r1 - k), colour, 1)
+        if dashed:
+            put_dashed_rectangle(out, (c0 + k, r0 + k), (c1 - k, r1 - k), colour, DASH_PX)
+        else:
+            cv2.rectangle(out, (c0 + k, r0 + k), (c1 - k, r1 - k), colour, 1)
 
 
-def _dashed_outline(out: RgbImage, box_edges_px: Box, colour: Rgb, thickness_px: int) -> None:
-    """In place: `_outline` in dashes (`app.draw.put_dashed_rectangle`)."""
-    c0, r0, c1, r1 = box_pixels(box_edges_px)
-    for k in range(thickness_px):
-        if c0 + k > c1 - k or r0 + k > r1 - k:
-            break
-        put_dashed_rectangle(out, (c0 + k, r0 + k), (c1 - k, r1 - k), colour, DASH_PX)
+def measured_confirmed(tracks: Sequence[Track]) -> list[Track]:
+    """The confirmed vehicle and pedestrian tracks of `tracks` measured this frame: what the
+    demo's `confirmed` layer draws and the presenter counts."""
+    return [t for t in tracks if t.confirmed and t.misses == 0 and t.kind != "guard_rail"]
 
 
 def _tag(
@@ -202,7 +205,7 @@ def put_search_areas(
         _outline(out, exclusive_to_edges((c0, r0, c1, r1)), SEARCH_AREA_COLOUR, 1)
     for area, track_id in searched:
         c0, r0, c1, r1 = area.box_px
-        _dashed_outline(out, exclusive_to_edges((c0, r0, c1, r1)), SEARCH_AREA_COLOUR, 1)
+        _outline(out, exclusive_to_edges((c0, r0, c1, r1)), SEARCH_AREA_COLOUR, 1, dashed=True)
         _tag(out, f"#{track_id}", c0, r0 - 1, SEARCH_AREA_COLOUR)
 
 
@@ -224,8 +227,7 @@ def put_vehicle_boxes(
             c0, r0, _, _ = box_pixels(box)
             _tag(out, "size", c0, r0 - 1, VEHICLE_REJECTED_COLOUR)
     for v in vehicles:
-        outline = _outline if v.target_indices else _dashed_outline
-        outline(out, v.box_px, VEHICLE_COLOUR, BOX_THICKNESS_PX)
+        _outline(out, v.box_px, VEHICLE_COLOUR, BOX_THICKNESS_PX, dashed=not v.target_indices)
 
 
 # --- guard rails (paper 002) ----------------------------------------------------------------
@@ -414,7 +416,7 @@ def put_confirmed_tracks(out: RgbImage, tracks: Sequence[Track]) -> None:
     tracks: e.g. `FrameResult.tracked_vehicles + FrameResult.tracked_pedestrians`.
     """
     require_rgb_image("out", out)
-    shown = [t for t in tracks if t.confirmed and t.misses == 0 and t.kind != "guard_rail"]
+    shown = measured_confirmed(tracks)
     for t in shown:
         if t.kind == "vehicle":
             _outline(out, t.box_px, VEHICLE_COLOUR, BOX_THICKNESS_PX)
