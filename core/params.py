@@ -367,9 +367,9 @@ class GuardRailParams:
     manage_overlaps: bool = True
     # beyond the paper (core/guardrail.py, step 6): an area the rail's area covers is labelled
     # by overlap only when its target lies within overlap_gate_m across of the rail's target,
-    # and searched otherwise (a parked car or a sign beside the rail); 0: no gate (the
-    # papers' preset)
-    overlap_gate_m: float = 1.0
+    # and searched otherwise (a parked car or a sign beside the rail); 0: no gate, the
+    # default and the papers' preset (1 m was measured and not adopted: Notes)
+    overlap_gate_m: float = 0.0
     # beyond the paper (core/guardrail.py, step 5): the line must pass the target at least
     # this high above the road, not along it (kerbs, lane edges, shadows, a parked car's
     # sill); the papers' preset: -100 (no test)

@@ -402,8 +402,8 @@ def test_a_covered_area_off_the_rail_is_searched_and_the_chain_goes_on() -> None
     a = chain_areas()
     # B's target stands 2 m further out than the rail's (a parked car beside it)
     beside = dataclasses.replace(a["B"], target=static_target(12.0, 6.0, 20.0))
-    result = detect_guard_rails((a["A"], beside, a["C"]), 20.0, PARAMS)
-    assert PARAMS.overlap_gate_m < 2.0
+    gated = dataclasses.replace(PARAMS, overlap_gate_m=1.0)
+    result = detect_guard_rails((a["A"], beside, a["C"]), 20.0, gated)
     assert [c.target_index for c in result.checks] == [0, 1, 2]
     assert [c.verdict for c in result.checks] == ["guard_rail", "not_guard_rail", "overlap"]
     assert [c.overlapped_by for c in result.checks] == [None, None, 0]
