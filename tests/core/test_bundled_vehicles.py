@@ -63,8 +63,10 @@ def test_no_highway_or_stop_and_go_vehicle_is_labelled_guard_rail(
     assert by_name["stop_and_go"].guardrails.vehicles_labelled == 0
     # today's count on exurban, as a regression guard (see the strict xfail below): 6
     # before the vehicle border and base checks (core/vehicle.py, steps 6-7), 7 after them,
-    # through the tracker (which vehicles are tracked decides which slow targets are checked)
-    assert by_name["exurban"].guardrails.vehicles_labelled <= 7
+    # through the tracker (which vehicles are tracked decides which slow targets are checked);
+    # 12 since rail lines leave out wrong returns (core/rail_lines.py Notes: cars parked
+    # beside the rail get a line along them)
+    assert by_name["exurban"].guardrails.vehicles_labelled <= 12
 
 
 @pytest.mark.xfail(

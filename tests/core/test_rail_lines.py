@@ -15,6 +15,7 @@ from core.io.frame import RadarTarget
 from core.params import GuardRailParams, Params, ParamsError, params_from
 from core.rail_lines import (
     LINE_EXTEND_M,
+    LINE_MAX_OUTLIER_FRACTION,
     LINE_MAX_RMS_M,
     RailReturns,
     along_rail_lines,
@@ -91,6 +92,21 @@ def test_returns_close_together_or_scattered_make_no_line() -> None:
 
     assert fit_line(zigzag, "right") is None  # RMS 1 m > LINE_MAX_RMS_M
     assert LINE_MAX_RMS_M < 1.0
+
+
+def test_a_few_wrong_returns_are_left_out_of_the_line() -> None:
+    xs = [10.0, 14.0, 18.0, 22.0, 26.0, 30.0, 34.0, 38.0, 42.0]
+    ys = [rail_y_m(x) for x in xs]
+    ys[2] += 4.0  # a car's return labelled by mistake, inside the rail
+    ys[6] -= 5.0  # clutter beyond it
+    line = fit_line(returns_at(xs, ys), "right")
+    assert line is not None and line.returns == 7
+    assert line.coefficients == pytest.approx((-7.0, 0.0, 0.002), abs=1e-9)
+    assert line.rms_m == pytest.approx(0.0, abs=1e-9)
+    # more than LINE_MAX_OUTLIER_FRACTION wrong: no line rather than a line through them
+    ys[4] += 3.0
+    assert LINE_MAX_OUTLIER_FRACTION * len(xs) < 3
+    assert fit_line(returns_at(xs, ys), "right") is None
 
 
 def test_remembered_returns_move_with_the_car_and_age_out() -> None:
