@@ -101,8 +101,18 @@ Notes:
       highway 538 -> 561 and 446 -> 467. On the aiMotive night motorway (no rail truth)
       28 % of the labelling lines passed below 0.1 m (median 0.33 m, as the synthetic
       rails'): targets labelled 642 -> 480, vehicle FP per frame 0.72 -> 0.92; 0.0 m did
-      little better there (0.86) and kept more vehicles labelled on nuScenes (74). The
-      papers' preset: -100 m (no height test).
+      little better there (0.86) and kept more vehicles labelled on nuScenes (74). Since
+      the rail lines leave out wrong returns (`core.rail_lines` Notes), a return the
+      height test loses on a rail is mostly labelled along its line, and the test stands
+      at 0.15 m: on drives of new seeds, highway / exurban, seeds 1818-2525 / 1313-1717 +
+      2727, rail returns labelled 0.82 / 0.83 -> 0.81 / 0.80 and 0.80 / 0.94 -> 0.79 /
+      0.92, rail FP per frame on exurban 0.307 -> 0.278 and 0.326 -> 0.310 (stop_and_go
+      0.129 -> 0.113 and 0.076 -> 0.062), vehicles labelled guard rail on exurban 56 -> 51
+      and 54 -> 53, radar-seen MOTA within +0.007, vehicle FP per frame within +0.002;
+      nuScenes' vehicles labelled guard rail 22 -> 13 (trailers and parked trucks, lines
+      0.10-0.14 m up); aiMotive one vehicle FP more in 50 frames. 0.2 m lost more rail
+      returns (exurban 0.78) for one vehicle fewer on nuScenes. The papers' preset: -100 m
+      (no height test).
     - Slow targets: paper 002 checks every target slower than 5 m/s over ground. A guard
       rail stands still: the synthetic rails' returns measure at most 0.12 m/s (99th
       percentile), aiMotive's stationary returns within 0.25 m/s, nuScenes' (ego speed from

@@ -372,8 +372,8 @@ class GuardRailParams:
     overlap_gate_m: float = 0.0
     # beyond the paper (core/guardrail.py, step 5): the line must pass the target at least
     # this high above the road, not along it (kerbs, lane edges, shadows, a parked car's
-    # sill); the papers' preset: -100 (no test)
-    min_line_height_m: float = 0.1
+    # sill, a trailer's chassis); the papers' preset: -100 (no test)
+    min_line_height_m: float = 0.15
     # beyond the paper: a slow target where the tracker expects a vehicle
     # (SearchArea.tracked) is not checked; the papers' preset: False
     skip_tracked_vehicles: bool = True

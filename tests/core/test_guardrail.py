@@ -629,7 +629,9 @@ def test_guard_rails_on_the_bundled_highway_drive(report: Callable[[str], None])
     # Most rail returns whose area no vehicle hides are found (0.80 measured); behind the
     # traffic of the busy highway most are hidden, which the paper leaves undetected too.
     assert f.clear >= 40 and f.clear_labelled >= 0.7 * f.clear
-    assert f.near_rail_labelled >= 0.35 * f.near_rail  # 0.41 measured
+    # 0.35 measured with the line 0.15 m up at least (0.41 at 0.1 m); the engine's rail
+    # lines (core/rail_lines.py) label most of the rest
+    assert f.near_rail_labelled >= 0.3 * f.near_rail
     # the line search alone, on every target whatever its speed, rarely takes a vehicle for
     # a rail (3 of 107 measured)
     assert f.any_speed_on_vehicle_labelled <= 0.05 * f.any_speed_on_vehicle
