@@ -33,6 +33,7 @@ from core.evaluation.vehicles import (
     FrameVehicles,
     event_stats,
     frame_stats,
+    lies_on,
     score_frame,
 )
 from core.io.frame import RadarTarget
@@ -192,6 +193,24 @@ def test_an_estimate_without_radar_off_every_vehicle_is_a_false_positive() -> No
     assert frame.obstacles == ((-3, "fp"),)
     s = frame_stats([frame])
     assert (s.rd, s.fp, s.nvo) == (1, 1, 0) and s.fp_at == ((0, -3),)
+
+
+def test_a_return_beside_a_vehicle_is_a_false_positive_only_when_its_estimate_is_off_it() -> None:
+    """A radar point 1.6 m from a car's centre line (0.2 m beyond the margin) is no
+    vehicle's; vision boxing the car from it reports the car (no FP), vision boxing empty
+    road beside it reports nothing true (FP), and without an estimate it is a not-validated
+    obstacle."""
+    objects = [car(1, 20.0, 0.0)]
+    radar = [target(20.0, 1.6), target(30.0, 1.6), target(40.0, 1.6)]
+    assert not any(lies_on(t.x_m, t.y_m, objects[0]) for t in radar)
+    estimates = [
+        Estimate(20.0, 0.1, 1.8, (0,)),  # the car, found from the point beside it
+        Estimate(30.0, 1.0, 1.8, (1,)),  # 10 m behind the car: on nothing
+    ]
+    areas = [area(k, t) for k, t in enumerate(radar)]
+    frame = score_frame(0, objects, radar, areas, estimates, TOLERANCE_M)
+    assert frame.vehicles == ((1, "rd"),)
+    assert frame.obstacles == ((1, "fp"), (2, "nvo"))
 
 
 def test_a_vehicle_wider_than_the_area_is_a_radar_false_negative() -> None:
@@ -579,8 +598,9 @@ def test_compare_sets_the_headline_figures_of_two_parameter_sets_side_by_side(
 
 def test_the_papers_preset_reproduces_the_figures_from_before_the_departures() -> None:
     # README's stop_and_go vehicle row before the defaults departed from the papers (commit
-    # 0b0e792): RD 56, FN 97, RFN 341, FP 24; pitch 0.26 deg RMS
+    # 0b0e792): RD 56, FN 97, RFN 341, FP 24; pitch 0.26 deg RMS. FP 22 since a box from a
+    # return beside a vehicle that lies on the vehicle is no FP (core/evaluation/vehicles.py)
     r = evaluate_recording(DEFAULT_RECORDINGS / "stop_and_go", params_from("papers"), timing=False)
     v = r.vehicles
-    assert (v.rd, v.fn, v.rfn, v.fp) == (56, 97, 341, 24)
+    assert (v.rd, v.fn, v.rfn, v.fp) == (56, 97, 341, 22)
     assert r.pitch.rms_deg == pytest.approx(0.26, abs=0.005)
