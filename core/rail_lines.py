@@ -177,70 +177,63 @@ def remember(
 
 
 @_jit
+def _least_squares(x: F64Array, y: F64Array, keep: npt.NDArray[np.bool_], terms: int) -> F64Array:
+    """(3,) c0, c1, c2 (those past `terms` 0) of y = sum(c_k x^k) over the kept points, by
+    the normal equations (a 2x2 or 3x3 system, x within a radar's range) and Gaussian
+    elimination with partial pivoting; NaN when the system is singular."""
+    system = np.zeros((terms, terms + 1))
+    for i in range(len(x)):
+        if keep[i]:
+            for r in range(terms):
+                for c in range(terms):
+                    system[r, c] += x[i] ** (r + c)
+                system[r, terms] += x[i] ** r * y[i]
+    for c in range(terms):
+        pivot = c
+        for r in range(c + 1, terms):
+            if abs(system[r, c]) > abs(system[pivot, c]):
+                pivot = r
+        if system[pivot, c] == 0.0:
+            return np.full(3, np.nan)
+        for k in range(terms + 1):
+            system[c, k], system[pivot, k] = system[pivot, k], system[c, k]
+        for r in range(c + 1, terms):
+            factor = system[r, c] / system[c, c]
+            for k in range(c, terms + 1):
+                system[r, k] -= factor * system[c, k]
+    coefficients = np.zeros(3)
+    for r in range(terms - 1, -1, -1):
+        total = system[r, terms]
+        for k in range(r + 1, terms):
+            total -= system[r, k] * coefficients[k]
+        coefficients[r] = total / system[r, r]
+    return coefficients
+
+
+@_jit
 def _robust_fit(
     x: F64Array, y: F64Array, max_outliers: int
 ) -> tuple[F64Array, int, float, int, float, float]:
     """Step 2's fit of y on x: (coefficients (3,), how many of them are used (0: no line),
-    RMS residual, returns kept, nearest and farthest kept x). Least squares by the normal
-    equations (a 2x2 or 3x3 system, x within a radar's range), solved by Gaussian
-    elimination with partial pivoting; while the RMS residual exceeds LINE_MAX_RMS_M, the
-    return farthest from the fit is left out and the rest fitted again, at most
-    max_outliers times."""
+    RMS residual, returns kept, nearest and farthest kept x). While the RMS residual exceeds
+    LINE_MAX_RMS_M, the return farthest from the fit is left out and the rest fitted again,
+    at most max_outliers times."""
     keep = np.ones(len(x), dtype=np.bool_)
-    coefficients = np.zeros(3)
-    outliers = 0
-    while True:
-        n = 0
-        x_near, x_far = np.inf, -np.inf
-        for i in range(len(x)):
-            if keep[i]:
-                n += 1
-                x_near, x_far = min(x_near, x[i]), max(x_far, x[i])
+    for _ in range(max_outliers + 1):
+        n = int(np.count_nonzero(keep))
+        x_near, x_far = np.min(x[keep]) if n else np.inf, np.max(x[keep]) if n else -np.inf
         if n < LINE_MIN_POINTS or x_far - x_near < LINE_MIN_SPAN_M:
-            return coefficients, 0, np.nan, n, x_near, x_far
+            break
         terms = 3 if n >= QUADRATIC_MIN_POINTS else 2
-        system = np.zeros((terms, terms + 1))
-        for i in range(len(x)):
-            if keep[i]:
-                for r in range(terms):
-                    for c in range(terms):
-                        system[r, c] += x[i] ** (r + c)
-                    system[r, terms] += x[i] ** r * y[i]
-        for c in range(terms):
-            pivot = c
-            for r in range(c + 1, terms):
-                if abs(system[r, c]) > abs(system[pivot, c]):
-                    pivot = r
-            if system[pivot, c] == 0.0:
-                return coefficients, 0, np.nan, n, x_near, x_far
-            for k in range(terms + 1):
-                system[c, k], system[pivot, k] = system[pivot, k], system[c, k]
-            for r in range(c + 1, terms):
-                factor = system[r, c] / system[c, c]
-                for k in range(c, terms + 1):
-                    system[r, k] -= factor * system[c, k]
-        coefficients[:] = 0.0
-        for r in range(terms - 1, -1, -1):
-            total = system[r, terms]
-            for k in range(r + 1, terms):
-                total -= system[r, k] * coefficients[k]
-            coefficients[r] = total / system[r, r]
-        worst, worst_residual, squares = -1, -1.0, 0.0
-        for i in range(len(x)):
-            if keep[i]:
-                residual = abs(
-                    y[i] - (coefficients[0] + x[i] * (coefficients[1] + x[i] * coefficients[2]))
-                )
-                squares += residual * residual
-                if residual > worst_residual:
-                    worst, worst_residual = i, residual
-        rms = math.sqrt(squares / n)
+        c = _least_squares(x, y, keep, terms)
+        residual = np.where(keep, np.abs(y - (c[0] + x * (c[1] + x * c[2]))), -1.0)
+        rms = math.sqrt(np.sum(np.where(keep, residual * residual, 0.0)) / n)
         if rms <= LINE_MAX_RMS_M:
-            return coefficients, terms, rms, n, x_near, x_far
-        if outliers == max_outliers:
-            return coefficients, 0, rms, n, x_near, x_far
-        keep[worst] = False
-        outliers += 1
+            return c, terms, rms, n, x_near, x_far
+        if not rms >= 0:  # singular: NaN
+            break
+        keep[np.argmax(residual)] = False
+    return np.zeros(3), 0, np.nan, 0, np.nan, np.nan
 
 
 def fit_line(returns: RailReturns, side: str) -> RailLine | None:
