@@ -379,9 +379,10 @@ class GuardRailParams:
     skip_tracked_vehicles: bool = True
     # beyond the paper (core/rail_lines.py): a slow target along the line of the returns
     # found on a rail over the last line_memory_s, within line_gate_m across, is guard rail
-    # too (0 s: off, the papers' preset)
+    # too (0 s: off, the papers' preset); 0.5 m since the lines leave out wrong returns
+    # (core/rail_lines.py Notes; 0.4 before)
     line_memory_s: float = 2.0
-    line_gate_m: float = 0.4
+    line_gate_m: float = 0.5
 
     def __post_init__(self) -> None:
         _positive(self, "max_speed_mps", "sobel_threshold", "line_gate_m")
