@@ -296,9 +296,10 @@ def _search(area: SearchArea, params: VehicleParams) -> TargetResult:
     axis or a box was found (`detect_vehicles` settles it)."""
     h = area.patch.shape[0]
     threshold = params.symmetry_threshold * h
+    base_col, base_row = area.to_patch_px(*area.base_px)  # the radar point's base
     edges, chi, found, chosen = symmetry.search(
         area.patch,
-        area.to_patch_px(*area.base_px)[0],  # the area's centre column
+        base_col,  # the area's centre column
         float(params.edge_threshold),
         params.max_half_width_px,
         threshold,
@@ -309,7 +310,7 @@ def _search(area: SearchArea, params: VehicleParams) -> TargetResult:
         params.top_edge_fraction,
         params.min_height_ratio,
         math.ceil(params.min_border_pairs_per_row * h),
-        math.floor(area.to_patch_px(*area.base_px)[1] - params.max_base_height_m * area.px_per_m),
+        math.floor(base_row - params.max_base_height_m * area.px_per_m),
     )
     candidates = _candidates(area, found, params)
     return TargetResult(
