@@ -277,7 +277,7 @@ def bands_for(camera: CameraModel, params: PedestrianParams) -> Bands:
     )
     n = len(d)
     points = np.zeros((2 * n, 3))
-    points[:, 0] = np.tile(d, 2)
+    points[:n, 0] = points[n:, 0] = d
     points[n:, 2] = 1.0  # a metre above the road
     pixels, in_front = camera.project(points)
     feet, heads = pixels[:n], pixels[n:]
@@ -605,7 +605,8 @@ def _constraints(
             ~((params.min_height_m <= height_m) & (height_m <= params.max_height_m)),
             ~((params.aspect_min <= aspect) & (aspect <= params.aspect_max)),
         ]
-    first = np.select(failed, np.arange(1, len(failed) + 1), 0).tolist()
+    stacked = np.array(failed)  # (4, N): each constraint's failures, in the order above
+    first = np.where(stacked.any(axis=0), stacked.argmax(axis=0) + 1, 0).tolist()
     names: tuple[Verdict | None, ...] = (None, *CONSTRAINT_VERDICTS)
     return [names[k] for k in first]
 
