@@ -483,6 +483,12 @@ class PedestrianParams:
     verify_with_hog: bool = True
     hog_min_score: float = 0.3
     hog_without_motion_min_score: float = 0.5
+    # beyond the papers (core/pedestrian.py, step 4): a box whose base stands off its band's
+    # distance (the scan seeded it in a farther or nearer band) is kept when its height and
+    # width are a person's there, ranking after the boxes that stand at their band's distance
+    # when one box per person is chosen (False: the "perspective" constraint rejects it,
+    # the papers' preset)
+    keep_off_band_boxes: bool = True
 
     def __post_init__(self) -> None:
         _positive(

@@ -17,7 +17,7 @@ import pytest
 
 from core.io.frame import RadarTarget
 from core.params import PedestrianParams
-from core.pedestrian import PedestrianResult, bands_for, detect_pedestrians
+from core.pedestrian import PedestrianResult, _constraints, bands_for, detect_pedestrians
 from core.synth.scene import Pedestrian, StaticObject, Trajectory
 from tests.core.roadscenes import RoadRenderer, camera, straight_road
 
@@ -154,6 +154,23 @@ def test_a_near_person_is_framed_head_to_feet() -> None:
     _, top, _, bottom = found.extended_box_px
     assert abs(top - v0) <= 3 and abs(bottom - v1) <= 2
     assert found.height_m == pytest.approx(PERSON_HEIGHT_M, rel=0.05)
+
+
+def test_a_box_off_its_bands_distance_is_kept_when_a_persons_size_there() -> None:
+    # world rows: distance, lateral, width, height of each box's base; all scanned in a band
+    # at 18 m. A person 8 m away whom the refinement framed head to feet, the same box 0.5 m
+    # tall (a torso), and a base above the horizon (NaN)
+    world = np.array(
+        [[8.0, 0.0, 0.5, 1.75], [8.0, 0.0, 0.5, 0.5], [np.nan, np.nan, np.nan, np.nan]]
+    )
+    no_top, band_m = np.zeros(3, dtype=bool), np.full(3, 18.0)
+    kept, off_band = _constraints(no_top, band_m, world, PARAMS)
+    assert kept == [None, "size", "size"]
+    assert off_band.tolist() == [True, True, True]
+    papers, _ = _constraints(no_top, band_m, world, replace(PARAMS, keep_off_band_boxes=False))
+    assert papers == ["perspective", "perspective", "perspective"]
+    near_band = np.full(3, 8.5)
+    assert _constraints(no_top, near_band, world, PARAMS)[1].tolist() == [False, False, True]
 
 
 @pytest.mark.parametrize(
