@@ -561,8 +561,8 @@ class TrackingParams:
     max_missed_frames: int = 3
     # a tentative track is kept through this many consecutive missed frames (chosen; the
     # papers' preset 0: dropped at its first miss, so a vehicle detected every other frame
-    # was never confirmed; core/tracking.py, step 5)
-    tentative_max_missed_frames: int = 1
+    # was never confirmed; 1 before 2026-11-29; core/tracking.py, step 5)
+    tentative_max_missed_frames: int = 2
     # hard cap on the distance between a track's prediction and a detection it may take,
     # whatever the covariance (chosen: a 30 m/s car seen again 0.1 s after its birth, with
     # speed 0, is 3 m from its prediction; 2 m lost such tracks on the second frame)
