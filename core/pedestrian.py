@@ -632,15 +632,13 @@ def _constraints(
         # PERSPECTIVE_BANDS band steps of there, or the scan framed the wrong part of someone
         steps = np.abs(np.log(distance_m / band_distance_m)) / math.log(params.distance_step_ratio)
         aspect = width_m / height_m
+        off_band = ~(steps <= PERSPECTIVE_BANDS)
         failed = [
             no_top,
-            ~(steps <= PERSPECTIVE_BANDS),
+            np.zeros_like(off_band) if params.keep_off_band_boxes else off_band,
             ~((params.min_height_m <= height_m) & (height_m <= params.max_height_m)),
             ~((params.aspect_min <= aspect) & (aspect <= params.aspect_max)),
         ]
-    off_band = failed[1]
-    if params.keep_off_band_boxes:
-        failed[1] = np.zeros_like(off_band)
     stacked = np.array(failed)  # (4, N): each constraint's failures, in the order above
     first = np.where(stacked.any(axis=0), stacked.argmax(axis=0) + 1, 0).tolist()
     names: tuple[Verdict | None, ...] = (None, *CONSTRAINT_VERDICTS)

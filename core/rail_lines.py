@@ -186,7 +186,8 @@ def remember(
 def _least_squares(x: F64Array, y: F64Array, keep: npt.NDArray[np.bool_], terms: int) -> F64Array:
     """(3,) c0, c1, c2 (those past `terms` 0) of y = sum(c_k x^k) over the kept points, by
     the normal equations (a 2x2 or 3x3 system, x within a radar's range) and Gaussian
-    elimination with partial pivoting; NaN when the system is singular."""
+    elimination with partial pivoting (numba's np.linalg needs SciPy, which this project
+    does not install); NaN when the system is singular."""
     system = np.zeros((terms, terms + 1))
     for i in range(len(x)):
         if keep[i]:
