@@ -206,6 +206,11 @@ class VehicleParams:
     edge_threshold: float = 30.0
     # chi = s^2 / n a vehicle's axis reaches, per row of the resampled area
     symmetry_threshold: float = 0.35
+    # beyond the papers (core/vehicle.py Notes, step 6): the threshold times this for a
+    # target that neither moves over ground (moving_speed_mps) nor lies where a confirmed
+    # vehicle track is expected (track_gate_m): posts, trunks and signs are still, and
+    # their boxes pass with less symmetry than vehicles' (the papers' preset: 1)
+    still_symmetry_factor: float = 1.2
     # chi stays below the threshold for windows narrower than this (paper 001: "low for
     # narrow area widths"): poles, posts and gaps are not vehicles
     narrow_width_m: float = 0.4
@@ -279,6 +284,7 @@ class VehicleParams:
             "moving_speed_mps",
             "search_height_ratio",
             "symmetry_threshold",
+            "still_symmetry_factor",
             "refined_error_m",
             "default_height_ratio",
             "top_gap_ratio",

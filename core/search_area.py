@@ -106,8 +106,9 @@ class SearchArea:
     box_px: (col0, row0, col1, row1) integer pixel bounds after cropping (end exclusive), so
     the crop is `image[row0:row1, col0:col1]`; y_left_m, y_right_m: the area's sides in the
     world (vehicle frame), at the target's x_m; patch: (h, w) uint8 grey, the crop resampled;
-    px_per_m: patch pixels per metre across at the target's distance; tracked: the target lies
-    within `track_gate_m` of where a confirmed vehicle track is expected (`tracked_y_m`);
+    px_per_m: patch pixels per metre across at the target's distance; moving: the target
+    moves over ground (`moves`); tracked: the target lies within `track_gate_m` of where a
+    confirmed vehicle track is expected (`tracked_y_m`);
     too_far: the area has fewer than `min_image_px_per_m` image pixels per metre across
     (`image_px_per_m`), too coarse for vision: neither checked for a guard rail nor searched
     for a vehicle. The patch is an array of its own (C-contiguous, writable), never a view of
@@ -123,6 +124,7 @@ class SearchArea:
     y_right_m: float
     patch: npt.NDArray[np.uint8]
     px_per_m: float
+    moving: bool = False
     tracked: bool = False
     too_far: bool = False
 
@@ -195,13 +197,16 @@ def tracked_y_m(
     return None if nearest is None or nearest[0] > params.track_gate_m else nearest[1]
 
 
-def search_width_m(
-    target: RadarTarget, ego_speed_mps: float, params: VehicleParams, tracked: bool
-) -> float:
-    """The world width of a target's area (step 2): `moving_search_width_m` when it moves over
-    ground faster than `moving_speed_mps` or is `tracked` (within `track_gate_m` of a tracked
-    vehicle's expected position, `tracked_y_m`), else `search_width_m`."""
-    moving = abs(real_speed_mps(target, ego_speed_mps)) > params.moving_speed_mps
+def moves(target: RadarTarget, ego_speed_mps: float, params: VehicleParams) -> bool:
+    """The target moves over ground faster than `moving_speed_mps` (never with the ego
+    speed unknown, NaN)."""
+    return abs(real_speed_mps(target, ego_speed_mps)) > params.moving_speed_mps
+
+
+def search_width_m(moving: bool, tracked: bool, params: VehicleParams) -> float:
+    """The world width of a target's area (step 2): `moving_search_width_m` when it is
+    `moving` (`moves`) or `tracked` (within `track_gate_m` of a tracked vehicle's expected
+    position, `tracked_y_m`), else `search_width_m`."""
     return params.moving_search_width_m if moving or tracked else params.search_width_m
 
 
@@ -238,9 +243,9 @@ def search_areas(
     on_track = [tracked_y_m(t, params, tracked_m) for t in radar]
     if params.centre_on_track:
         centres_y_m = [c if y is None else y for c, y in zip(centres_y_m, on_track, strict=True)]
+    moving = [moves(t, ego_speed_mps, params) for t in radar]
     widths_m = [
-        search_width_m(t, ego_speed_mps, params, y is not None)
-        for t, y in zip(radar, on_track, strict=True)
+        search_width_m(m, y is not None, params) for m, y in zip(moving, on_track, strict=True)
     ]
     pts = np.array(
         [
@@ -290,6 +295,7 @@ def search_areas(
                 y_right_m=centres_y_m[i] - widths_m[i] / 2,
                 patch=patch,
                 px_per_m=size[0] / (c1 - c0) * width_px / widths_m[i],
+                moving=moving[i],
                 tracked=on_track[i] is not None,
                 too_far=width_px / widths_m[i] < params.min_image_px_per_m,
             )

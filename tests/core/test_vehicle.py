@@ -108,6 +108,11 @@ def test_a_target_moving_over_ground_gets_the_wider_area() -> None:
         )
     }
     assert widths["still"] == pytest.approx((2.5, 64 / 2.5))
+    moving = {
+        name: search_areas(image, cam, (t,), PARAMS, ego)[0].moving
+        for name, t, ego in (("still", still, ego_mps), ("car", car, ego_mps), ("?", car, math.nan))
+    }
+    assert moving == {"still": False, "car": True, "?": False}
     assert widths["slow"] == pytest.approx((2.5, 64 / 2.5))
     assert widths["unknown"] == pytest.approx((2.5, 64 / 2.5))
     # 4 m at 25 m is 128 px, resampled to 64
@@ -446,6 +451,34 @@ def test_the_top_rises_past_a_base_without_sides() -> None:
     assert border_top(image, box, PARAMS) == pytest.approx(59.5, abs=1)  # Sobel: 3 rows
     off = dataclasses.replace(PARAMS, top_search_ratio=0.0)
     assert border_top(image, box, off) == box[1]
+
+
+def test_a_still_untracked_target_needs_more_symmetry(
+    rendered_car: tuple[np.ndarray, np.ndarray],
+) -> None:
+    """A still target no track expects needs `still_symmetry_factor` x the threshold: with
+    the factor just above the car's own chi over the threshold, the car is found from a
+    moving or tracked target's area only; the papers' factor 1 finds it from all."""
+    image, _ = rendered_car
+    cam = camera()
+    radar = (target(20.0, 1.2),)
+    (area,) = search_areas(image, cam, radar, PARAMS)
+    assert not (area.moving or area.tracked)
+    (r,) = detect_vehicles((area,), radar, cam, PARAMS).targets
+    assert r.verdict == "vehicle"
+    assert r.threshold == pytest.approx(
+        PARAMS.symmetry_threshold * PARAMS.still_symmetry_factor * area.patch.shape[0]
+    )
+    ratio = r.candidates[r.chosen].chi / (PARAMS.symmetry_threshold * area.patch.shape[0])
+    strict = dataclasses.replace(PARAMS, still_symmetry_factor=ratio * 1.01)
+    papers = dataclasses.replace(PARAMS, still_symmetry_factor=1.0)
+    for a, params, found in (
+        (area, strict, False),
+        (dataclasses.replace(area, moving=True), strict, True),
+        (dataclasses.replace(area, tracked=True), strict, True),
+        (area, papers, True),
+    ):
+        assert bool(detect_vehicles((a,), radar, cam, params).vehicles) == found
 
 
 def test_radar_point_beside_the_car_finds_nothing(
