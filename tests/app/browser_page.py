@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import importlib.util
 import os
+import shutil
 import sys
 import tempfile
 from collections.abc import Iterator
@@ -89,6 +90,7 @@ def serving(
         with contextlib.suppress(Exception):  # a page that is gone must not hide the failure
             page.screenshot(path=str(SCREENSHOTS / f"{test}.png"))
         server.stop()
+        shutil.rmtree(server.presets.folder, ignore_errors=True)
 
 
 def camera_src(page: Page) -> str:
