@@ -212,7 +212,8 @@ def put_search_areas(
 def put_vehicle_boxes(
     out: RgbImage, vehicles: Sequence[Vehicle], targets: Sequence[TargetResult] = ()
 ) -> None:
-    """In place: the final vehicles' boxes in `VEHICLE_COLOUR` (in dashes those without a
+    """In place: the final vehicles' boxes (their bodies', `Vehicle.outline_px`) in
+    `VEHICLE_COLOUR` (in dashes those without a
     radar target, found where a track expected them: `core.track_search`), and the boxes the
     size filter dropped (targets with verdict "size_filter") in `VEHICLE_REJECTED_COLOUR`
     tagged "size".
@@ -227,7 +228,7 @@ def put_vehicle_boxes(
             c0, r0, _, _ = box_pixels(box)
             _tag(out, "size", c0, r0 - 1, VEHICLE_REJECTED_COLOUR)
     for v in vehicles:
-        _outline(out, v.box_px, VEHICLE_COLOUR, BOX_THICKNESS_PX, dashed=not v.target_indices)
+        _outline(out, v.outline_px, VEHICLE_COLOUR, BOX_THICKNESS_PX, dashed=not v.target_indices)
 
 
 # --- guard rails (paper 002) ----------------------------------------------------------------
@@ -395,7 +396,7 @@ def put_track_ids(out: RgbImage, tracks: Sequence[Track], coasting: bool = False
     tagged = [t for t in tracks if t.kind != "guard_rail"]
     for t in sorted(tagged, key=lambda t: t.misses > 0):  # stable: measured, then missed
         colour = VEHICLE_COLOUR if t.kind == "vehicle" else PEDESTRIAN_COLOUR
-        u0, _, _, v1 = t.box_px
+        u0, _, _, v1 = t.outline_px
         text = f"#{t.id}" if t.misses == 0 else f"#{t.id} ?"
         (w, _), _ = cv2.getTextSize(text, FONT, TAG_FONT_SCALE, 1)
         u = max(min(round(u0), out.shape[1] - w - 3), 0)
@@ -419,7 +420,7 @@ def put_confirmed_tracks(out: RgbImage, tracks: Sequence[Track]) -> None:
     shown = measured_confirmed(tracks)
     for t in shown:
         if t.kind == "vehicle":
-            _outline(out, t.box_px, VEHICLE_COLOUR, BOX_THICKNESS_PX)
+            _outline(out, t.outline_px, VEHICLE_COLOUR, BOX_THICKNESS_PX)
         else:  # a pedestrian's box has exclusive ends, as its candidate's
             _outline(out, exclusive_to_edges(t.box_px), PEDESTRIAN_COLOUR, BOX_THICKNESS_PX)
     put_track_ids(out, shown)

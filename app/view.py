@@ -223,7 +223,8 @@ def seeds(result: FrameResult) -> Seeds:
     boxes = tuple((d.kind, d.box_px) for d in detections(result) if d.kind in SEED_KINDS)
     bases = tuple((a.base_px[0], a.base_px[1], a.target.x_m) for a in result.areas)
     tracks = tuple(
-        (t.kind, t.id, t.box_px) for t in (*result.tracked_vehicles, *result.tracked_pedestrians)
+        (t.kind, t.id, t.outline_px)
+        for t in (*result.tracked_vehicles, *result.tracked_pedestrians)
     )
     return Seeds(result.index, boxes, bases, tracks)
 

@@ -47,7 +47,7 @@ if TYPE_CHECKING:
     from core.ego import EgoMotion
     from core.io.drive import Drive
     from core.io.frame import FrameInput, RadarTarget
-    from core.params import GuardRailParams, Params, TrackingParams
+    from core.params import GuardRailParams, Params
     from core.tracking import Measurement, Tracker
 
 # Paper 000, section III: "640x300 images using standard Pentium 4 at 3.0 GHz" (None: the
@@ -346,7 +346,7 @@ def _tracking_cases(drive: Drive, pairs: Sequence[Pair], params: Params) -> list
     return cases
 
 
-def _tracking_runs(cases: Sequence[_TrackingCase], params: TrackingParams) -> list[Run]:
+def _tracking_runs(cases: Sequence[_TrackingCase], params: Params) -> list[Run]:
     """The engine's tracking stage (`update_tracks`) on each case, on a fresh copy of the
     tracker after the frame before."""
     from core.engine import update_tracks
@@ -670,7 +670,7 @@ def bench(
         try:
             for stage in chosen:
                 runs = (
-                    _tracking_runs(cases, params.tracking)
+                    _tracking_runs(cases, params)
                     if stage == "tracking"
                     else make[stage](camera, pairs, params)
                 )

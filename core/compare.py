@@ -91,7 +91,7 @@ def detections(result: FrameResult) -> tuple[Detection, ...]:
     out = [
         Detection(
             "vehicle",
-            v.box_px,
+            v.outline_px,
             v.distance_m,
             f"vehicle at {_metres(v.distance_m, '.1f')} m, "
             f"lateral {_metres(v.lateral_m, '+.1f')} m, {_metres(v.width_m, '.1f')} m wide",

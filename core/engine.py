@@ -64,6 +64,7 @@ Replay tolerance (what a seek reproduces of playing the drive from its start):
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 import time
 from collections import OrderedDict
@@ -82,7 +83,7 @@ from core.motion_stereo import (
     MotionStereoState,
     frames_to_forget,
 )
-from core.params import Params, TrackingParams
+from core.params import Params
 from core.pedestrian import PedestrianResult, detect_pedestrians
 from core.pitch import PitchMemory, PitchResult, detect_pitch
 from core.radar_smoothing import RememberedPoint, smooth_centres
@@ -99,7 +100,7 @@ from core.tracking import (
     coasting_boxes,
     confirmed_sources,
 )
-from core.vehicle import VehicleResult, detect_vehicles
+from core.vehicle import VehicleResult, body_box, detect_vehicles
 
 MS_PER_S = 1000.0
 # A background whose weights never forget (frames_to_forget None) is rebuilt from this many
@@ -322,13 +323,25 @@ def update_tracks(
     ego: EgoMotion | None,
     dt_s: float,
     camera: CameraModel,
-    params: TrackingParams,
+    params: Params,
 ) -> TrackResult:
     """The tracking stage: the tracker's update with this frame's measurements, then the
     boxes of confirmed tracks missed this frame moved to where they are expected
-    (`coasting_boxes`) unless `params.coasting_boxes_follow` is off."""
+    (`coasting_boxes`) unless `tracking.coasting_boxes_follow` is off, then each vehicle
+    track's body around its box (`core.vehicle.body_box`, step 12)."""
     tracks = tracker.update(measurements, ego, dt_s)
-    return coasting_boxes(tracks, camera) if params.coasting_boxes_follow else tracks
+    if params.tracking.coasting_boxes_follow:
+        tracks = coasting_boxes(tracks, camera)
+    length_m = params.vehicle.body_length_m
+    return dataclasses.replace(
+        tracks,
+        tracks=tuple(
+            dataclasses.replace(t, body_px=body_box(t.box_px, t.x_m, camera, length_m))
+            if t.kind == "vehicle"
+            else t
+            for t in tracks.tracks
+        ),
+    )
 
 
 class FusionEngine:
@@ -615,7 +628,7 @@ class FusionEngine:
             return VehicleResult(found.targets, found.vehicles + searched.vehicles), searched
 
         (vehicle, searched), vehicle_ms = _timed(vehicles)
-        boxes = tuple(v.box_px for v in vehicle.vehicles)
+        boxes = tuple(v.outline_px for v in vehicle.vehicles)
         pedestrian, pedestrian_ms = _timed(
             lambda: detect_pedestrians(
                 image,
@@ -633,7 +646,7 @@ class FusionEngine:
         )
 
         tracks, tracking_ms = _timed(
-            lambda: update_tracks(self._tracker, measurements, ego, dt_s, camera, p.tracking)
+            lambda: update_tracks(self._tracker, measurements, ego, dt_s, camera, p)
         )
         # read-only: the next frame reads it, and a kept state holds it by reference
         pitch.memory.row_histogram.flags.writeable = False

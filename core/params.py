@@ -245,6 +245,10 @@ class VehicleParams:
     # preset: top_search_ratio 0, off)
     top_search_ratio: float = 2.0
     top_gap_ratio: float = 0.2
+    # beyond the papers (core/vehicle.py, step 12): the box shown and scored for a vehicle
+    # holds its rear face and the same face this far behind, as the camera sees a vehicle
+    # that long: its side and roof (0: the rear face alone, the papers' preset)
+    body_length_m: float = 4.0
     # boxes from several targets overlapping by more than this share of the smaller one are
     # one vehicle (paper 001: "overlapping results")
     merge_overlap_fraction: float = 0.5
@@ -269,6 +273,12 @@ class VehicleParams:
             "min_border_pairs_per_row",
             "a number of pairs per row >= 0 (0: off)",
             self.min_border_pairs_per_row,
+        )
+        _check(
+            math.isfinite(self.body_length_m) and self.body_length_m >= 0,
+            "body_length_m",
+            "a length in metres >= 0 (0: the rear face alone)",
+            self.body_length_m,
         )
         _check(
             math.isfinite(self.min_image_px_per_m) and self.min_image_px_per_m >= 0,

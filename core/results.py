@@ -3,7 +3,9 @@
 Each line holds the frame's index and time, the pitch, the stage timings, the papers'
 per-frame detections (vehicles; pedestrian candidates with their verdicts; radar targets
 labelled guard rail) and the tracker's confirmed tracks. Boxes are (u0, v0, u1, v1) in
-full-image pixels; positions are in the vehicle frame (x forward, y left, metres).
+full-image pixels: a vehicle's box_px is its rear face, as vision measured it, its body_px
+the whole vehicle as shown (`core.vehicle`, step 12); positions are in the vehicle frame (x
+forward, y left, metres).
 """
 
 from __future__ import annotations
@@ -52,6 +54,7 @@ def frame_record(result: FrameResult) -> dict[str, Any]:
             {
                 "class": "vehicle",
                 "box_px": _box(v.box_px),
+                "body_px": _box(v.outline_px),
                 "distance_m": _number(v.distance_m, 3),
                 "lateral_m": _number(v.lateral_m, 3),
                 "width_m": _number(v.width_m, 3),
@@ -78,6 +81,7 @@ def frame_record(result: FrameResult) -> dict[str, Any]:
                 "id": k.id,
                 "class": k.kind,
                 "box_px": _box(k.box_px),
+                "body_px": _box(k.outline_px),
                 "x_m": _number(k.x_m, 3),
                 "y_m": _number(k.y_m, 3),
                 "vx_mps": _number(k.vx_mps, 3),

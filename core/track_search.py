@@ -57,6 +57,7 @@ Notes:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -180,8 +181,7 @@ def search_tracks(
         )
         if agreeing and not overlapping:
             track = min(agreeing, key=lambda t: abs(v.lateral_m - t.y_m))
-            kept.append(
-                Vehicle(v.box_px, track.x_m, v.lateral_m, v.width_m, v.vision_distance_m, ())
-            )
+            # its body was placed at its stand-in targets' distance, the tracks' own
+            kept.append(dataclasses.replace(v, distance_m=track.x_m, target_indices=()))
             track_of.append(track.id)
     return TrackSearchResult(tuple(t.id for t in tracks), search, tuple(kept), tuple(track_of))

@@ -183,7 +183,9 @@ class Track:
     confirm_frames; source_index: this frame's Measurement.source_index, None when missed;
     history_m: up to history_length filtered positions (x_m, y_m), oldest first, this frame's
     last, all in the current vehicle frame; unreturned: consecutive frames without a
-    detection backed by radar (a miss or a detection searched for the track, `for_track`).
+    detection backed by radar (a miss or a detection searched for the track, `for_track`);
+    body_px: the box of a vehicle's body around box_px (`core.vehicle.body_box`, set by the
+    engine; None: box_px's).
     """
 
     id: int
@@ -203,6 +205,12 @@ class Track:
     source_index: int | None
     history_m: tuple[tuple[float, float], ...]
     unreturned: int = 0
+    body_px: Box | None = None
+
+    @property
+    def outline_px(self) -> Box:
+        """The box shown and scored: the body's, else box_px."""
+        return self.box_px if self.body_px is None else self.body_px
 
 
 @dataclass(frozen=True)

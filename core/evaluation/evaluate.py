@@ -120,7 +120,7 @@ def error_listings(r: RecordingReport) -> tuple[ErrorListing, ...]:
 
 def _vehicle_estimates(result: FrameResult) -> list[Estimate]:
     return [
-        Estimate(v.distance_m, v.lateral_m, v.width_m, v.target_indices, v.box_px)
+        Estimate(v.distance_m, v.lateral_m, v.width_m, v.target_indices, v.outline_px)
         for v in result.vehicle.vehicles
     ]
 
@@ -133,7 +133,7 @@ def _track_estimates(result: FrameResult) -> list[Estimate]:
             t.y_m,
             t.width_m,
             () if t.source_index is None else found[t.source_index].target_indices,
-            t.box_px,
+            t.outline_px,
         )
         for t in result.tracked_vehicles
     ]
@@ -159,7 +159,7 @@ def _truth_people(truth: FrameTruth, params: Params) -> list[tuple[int, objects.
 
 
 def _track_boxes(tracks: Sequence[Track]) -> list[tuple[int, objects.Box]]:
-    return [(t.id, t.box_px) for t in tracks]
+    return [(t.id, t.outline_px) for t in tracks]
 
 
 class _Scorer:

@@ -128,7 +128,7 @@ def test_tracking_runs_on_the_engines_tracker() -> None:
         engine = FusionEngine(Params(), drive.camera)
         expected = {i: engine.process(drive.frame(i)).tracking for i in range(15)}
     assert [len(c.tracker._tracks) for c in cases] == [len(expected[k - 1].tracks) for k in (6, 14)]
-    for (_, now), run in zip(pairs, _tracking_runs(cases, Params().tracking), strict=True):
+    for (_, now), run in zip(pairs, _tracking_runs(cases, Params()), strict=True):
         first, second = run()(), run()()
         assert first == second == expected[now.index]
     assert expected[14].confirmed  # a test with tracks to compare

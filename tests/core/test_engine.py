@@ -20,7 +20,8 @@ from core.engine import FrameResult, FusionEngine, Milestones, replay_window
 from core.io.drive import Drive
 from core.io.errors import RecordingError
 from core.io.frame import FrameInput
-from core.params import Params
+from core.params import Params, params_from
+from core.vehicle import body_box
 from tests.core.playback import playback
 
 SEEK_DRIVE = "stop_and_go"  # the car brakes, stands and drives on: every mode of the stages
@@ -383,6 +384,24 @@ def test_bad_keep_states_is_refused_by_name(keep: object) -> None:
             FusionEngine(Params(), drive.camera, keep_states=keep)  # type: ignore[arg-type]
 
 
+def test_vehicle_tracks_show_their_bodies_and_the_papers_their_faces() -> None:
+    """Step 12 of `core.vehicle` on the tracks: a vehicle track's outline is the body around
+    its box at its distance; a pedestrian's is its box; the papers' preset has no body."""
+    played = _playback(SEEK_DRIVE)
+    length_m = Params().vehicle.body_length_m
+    vehicles = [(r, t) for r in played for t in r.tracked_vehicles]
+    assert vehicles
+    for r, t in vehicles:
+        assert t.outline_px == body_box(t.box_px, t.x_m, r.camera, length_m)
+    assert any(t.outline_px != t.box_px for _, t in vehicles)  # the side of one in another lane
+    assert all(t.outline_px == t.box_px for r in played for t in r.tracked_pedestrians)
+    with Drive(DEFAULT_RECORDINGS / SEEK_DRIVE) as drive:
+        engine = FusionEngine(params_from("papers"), drive.camera)
+        papers = [engine.process(drive.frame(i)) for i in range(20)]
+    assert all(t.outline_px == t.box_px for r in papers for t in r.tracked_vehicles)
+    assert all(v.outline_px == v.box_px for r in papers for v in r.vehicle.vehicles)
+
+
 def test_fusionscope_run_writes_a_line_per_frame(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "results.jsonl"
     assert main(["run", str(DEFAULT_RECORDINGS / SEEK_DRIVE), "--out", str(out)]) == 0
@@ -394,6 +413,9 @@ def test_fusionscope_run_writes_a_line_per_frame(tmp_path, capsys) -> None:  # t
         assert record["frame"] == r.index and record["t_ns"] == r.t_ns
         assert record["pitch_rad"] == pytest.approx(r.pitch.pitch_rad, abs=1e-6)
         assert len(record["vehicles"]) == len(r.vehicle.vehicles)
+        for v, written in zip(r.vehicle.vehicles, record["vehicles"], strict=True):
+            assert written["box_px"] == pytest.approx(v.box_px, abs=0.051)
+            assert written["body_px"] == pytest.approx(v.outline_px, abs=0.051)
         assert [p["verdict"] for p in record["pedestrians"]] == [
             c.verdict for c in r.pedestrian.candidates
         ]

@@ -27,7 +27,7 @@ from core.symmetry import (
     symmetry_matrix,
 )
 from core.synth.scene import Trajectory, Vehicle
-from core.vehicle import border_top, detect_vehicles, merge_boxes, world_size_ok
+from core.vehicle import body_box, border_top, detect_vehicles, merge_boxes, world_size_ok
 
 PARAMS = VehicleParams()
 RADAR_X_M = 3.6  # the synthetic radar's mount, ahead of the rear axle
@@ -479,6 +479,51 @@ def test_a_still_untracked_target_needs_more_symmetry(
         (area, papers, True),
     ):
         assert bool(detect_vehicles((a,), radar, cam, params).vehicles) == found
+
+
+@pytest.mark.parametrize(
+    ("x_m", "y_m", "height_m"),
+    [(20.0, -3.0, 1.5), (20.0, 3.5, 1.0), (12.0, 0.0, 1.5), (40.0, -7.0, 3.5)],
+)
+def test_the_body_is_the_box_of_the_vehicle_seen_whole(
+    x_m: float, y_m: float, height_m: float
+) -> None:
+    """Step 12: a vehicle 1.8 m wide and 4 m long, aligned with the car, whose rear face is
+    at (x_m, y_m): its body box is the bounding box of its eight corners' images (its side
+    beside the face off the car's path, its roof above the face when lower than the
+    camera), from the face's box alone; 0 m long is the face."""
+    cam = flat_camera()
+    length_m, half_m = 4.0, 0.9
+    corners = np.array(
+        [
+            (x, y, z)
+            for x in (x_m, x_m + length_m)
+            for y in (y_m - half_m, y_m + half_m)
+            for z in (0.0, height_m)
+        ]
+    )
+    uv, in_front = cam.project(corners)
+    assert in_front.all()
+    face, whole = uv[[0, 1, 2, 3]], uv
+    face_box = (face[:, 0].min(), face[:, 1].min(), face[:, 0].max(), face[:, 1].max())
+    want = (whole[:, 0].min(), whole[:, 1].min(), whole[:, 0].max(), whole[:, 1].max())
+    assert body_box(face_box, x_m, cam, length_m) == pytest.approx(want, abs=1e-3)
+    assert body_box(face_box, x_m, cam, 0.0) == face_box
+    if y_m == 0.0 and height_m > cam.extrinsics.height_m:  # straight ahead, roof unseen
+        assert body_box(face_box, x_m, cam, length_m) == pytest.approx(face_box)
+
+
+def test_a_detected_vehicle_carries_its_body(
+    rendered_car: tuple[np.ndarray, np.ndarray],
+) -> None:
+    image, _ = rendered_car
+    cam = camera()
+    radar = (target(20.0, 1.2),)
+    (v,) = detect_vehicles(search_areas(image, cam, radar, PARAMS), radar, cam, PARAMS).vehicles
+    assert v.outline_px == v.body_px == body_box(v.box_px, v.distance_m, cam, PARAMS.body_length_m)
+    papers = dataclasses.replace(PARAMS, body_length_m=0.0)
+    (p,) = detect_vehicles(search_areas(image, cam, radar, papers), radar, cam, papers).vehicles
+    assert p.outline_px == p.box_px
 
 
 def test_radar_point_beside_the_car_finds_nothing(
