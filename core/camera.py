@@ -376,6 +376,17 @@ class CameraModel:
             raise ValueError("horizon_row_px: the camera is rolled 90 deg, the horizon is vertical")
         return float(-(line[0] * u + line[2]) / line[1])
 
+    @functools.cached_property
+    def ahead_px(self) -> tuple[float, float]:
+        """(u, v) ideal pixels of the vanishing point of the car's axis, where the image of a
+        point straight ahead goes as it recedes (computed once per model). ValueError when
+        the camera does not look ahead."""
+        d_cam = self.R_vehicle_camera.T @ np.array([1.0, 0.0, 0.0])
+        if not d_cam[2] > 1e-12:
+            raise ValueError("ahead_px: the camera looks away from the car's axis")
+        u, v, w = self.intrinsics.K @ d_cam
+        return float(u / w), float(v / w)
+
     def pitch_from_horizon_row(self, v_px: float) -> float:
         """Pitch (rad) that puts the horizon at row `v_px` (roll = 0), paper 000 eq. 2 with
         v0 = cy."""

@@ -53,9 +53,10 @@ image pixels per metre across is not searched ("too_far", Notes).
 12. beyond the papers, the body: the box shown and scored for a vehicle (`outline_px`)
    holds its rear face (`box_px`) and the same face `body_length_m` farther, where a
    vehicle that long, aligned with the car's axis, shows it: the face's image scaled by
-   distance / (distance + body_length_m) about the vanishing point straight ahead. A
-   vehicle beside the car's path shows its side next to the face, one lower than the
-   camera its roof above it (Notes); steps 4-11 and the measurements keep the face.
+   distance / (distance + body_length_m) about the vanishing point straight ahead
+   (`CameraModel.ahead_px`). A vehicle beside the car's path shows its side next to the
+   face, one lower than the camera its roof above it (Notes); steps 4-11 and the
+   measurements keep the face.
 
 Coordinates: areas and their matrices in resampled-area pixels (`SearchArea.patch`); boxes
 in full-image pixels with pixel centres at integers, (u0, v0, u1, v1) pixel edges; world in
@@ -263,8 +264,6 @@ U8Array = npt.NDArray[np.uint8]
 
 # Step 11: a border's vertical edge may lie this many columns off the box's side.
 BORDER_TOLERANCE_PX = 2
-# Step 12: a point this far straight ahead projects onto the vanishing point of the car's axis.
-VANISHING_DISTANCE_M = 1e9
 
 
 @dataclass(frozen=True)
@@ -542,8 +541,7 @@ def body_box(box_px: Box, distance_m: float, camera: CameraModel, length_m: floa
     0 or the distance is not positive."""
     if not (length_m > 0 and distance_m > 0):
         return box_px
-    uv, _ = camera.project(np.array([[VANISHING_DISTANCE_M, 0.0, 0.0]]))
-    u_vp, v_vp = float(uv[0, 0]), float(uv[0, 1])
+    u_vp, v_vp = camera.ahead_px
     scale = distance_m / (distance_m + length_m)
     u0, v0, u1, v1 = box_px
     far = (

@@ -227,6 +227,28 @@ def test_horizon_row_is_paper_000_eq_2(cam: CameraModel) -> None:
     assert repitched.horizon_row_px() == pytest.approx(i.cy_px - i.fy_px * math.tan(0.05))
 
 
+@PROPERTY_SETTINGS
+@given(cam=cameras(distortion=False))
+def test_the_vanishing_point_ahead_is_where_points_straight_ahead_go(cam: CameraModel) -> None:
+    # A point 1e9 m straight ahead, at any height, is imaged on it to well under a pixel,
+    # and it lies on the horizon.
+    u, v = cam.ahead_px
+    for z_m in (0.0, 1.5, 4.0):
+        uv, front = cam.project([1e9, 0.0, z_m])
+        assert front[0]
+        np.testing.assert_allclose(uv[0], [u, v], atol=1e-3)
+    assert cam.horizon_row_px(u) == pytest.approx(v, abs=1e-6)
+
+
+@pytest.mark.parametrize(("pitch_rad", "yaw_rad"), [(0.0, 0.0), (0.05, 0.0), (0.0, 0.04)])
+def test_the_vanishing_point_ahead_known_pitch_and_yaw(pitch_rad: float, yaw_rad: float) -> None:
+    # pitch moves it up (paper 000 eq. 2, the horizon's row), yaw sideways (u = cx + fx
+    # tan(yaw), as a point straight ahead in `test_positive_yaw_turns_the_camera_left`)
+    u, v = _straight_camera(pitch_rad=pitch_rad, yaw_rad=yaw_rad).ahead_px
+    assert u == pytest.approx(319.5 + 500.0 * math.tan(yaw_rad), abs=1e-9)
+    assert v == pytest.approx(239.5 - 500.0 * math.tan(pitch_rad), abs=1e-9)
+
+
 # --- known answers ----------------------------------------------------------------------------
 @pytest.mark.parametrize("x_m", [2.0, 5.0, 11.5, 40.0])
 def test_point_straight_ahead_on_the_road(x_m: float) -> None:
