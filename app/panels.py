@@ -250,6 +250,8 @@ def symmetry_tile(
             xe = round(2 * edge * s)
             cv2.line(out, (xe, 0), (xe, h * s - 1), CHOSEN_AXIS_COLOUR, 1)
     caption = f"#{target.target_index} {target.target.x_m:.1f} m {target.verdict}"
+    if target.taller:
+        caption += ", taller area"
     return _captioned_tile(out, caption, tile_hw_px)
 
 

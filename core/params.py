@@ -211,6 +211,11 @@ class VehicleParams:
     # vehicle track is expected (track_gate_m): posts, trunks and signs are still, and
     # their boxes pass with less symmetry than vehicles' (the papers' preset: 1)
     still_symmetry_factor: float = 1.2
+    # beyond the papers (core/vehicle.py Notes, step 6): a target where a confirmed vehicle
+    # track is expected (track_gate_m) whose area holds no candidate axis is searched again
+    # in an area this many times as high, bottom and sides kept: a van or truck taller than
+    # the area, its symmetric doors and windows above it (the papers' preset: 1, no search)
+    tracked_taller_area_factor: float = 2.5
     # chi stays below the threshold for windows narrower than this (paper 001: "low for
     # narrow area widths"): poles, posts and gaps are not vehicles
     narrow_width_m: float = 0.4
@@ -304,6 +309,12 @@ class VehicleParams:
             "merge_max_gap_m",
             "lateral_smoothing_gate_m",
             "track_search_agreement_m",
+        )
+        _check(
+            math.isfinite(self.tracked_taller_area_factor) and self.tracked_taller_area_factor >= 1,
+            "tracked_taller_area_factor",
+            "a factor >= 1 (1: no second search)",
+            self.tracked_taller_area_factor,
         )
         _check(
             self.track_search_frames >= 0,

@@ -81,6 +81,7 @@ Notes:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -270,34 +271,63 @@ def search_areas(
         height_px = params.search_height_ratio * width_px * params.search_width_m / widths_m[i]
         v1 = v + params.search_bottom_fraction * height_px
         full = (u_left, v1 - height_px, u_right, v1)
-        c0, r0 = max(0, math.ceil(full[0])), max(0, math.ceil(full[1]))
-        c1, r1 = min(w_img, math.ceil(full[2])), min(h_img, math.ceil(full[3]))
-        if c1 - c0 < 2 or r1 - r0 < 2:
+        cropped = _crop(image, full, params)
+        if cropped is None:
             continue
-        scale = min(1.0, params.resampled_width_px / width_px)
-        size = (max(1, round((c1 - c0) * scale)), max(1, round((r1 - r0) * scale)))
-        crop = image[r0:r1, c0:c1]
-        # always a C-contiguous array of its own: the compiled searches then have one
-        # signature, loaded once from numba's cache instead of twice
-        patch: npt.NDArray[np.uint8] = (
-            crop.copy()
-            if scale == 1.0
-            else np.asarray(cv2.resize(crop, size, interpolation=cv2.INTER_LINEAR))
-        )
+        box, patch = cropped
         areas.append(
             SearchArea(
                 target_index=i,
                 target=t,
                 base_px=(u, v),
                 full_px=full,
-                box_px=(c0, r0, c1, r1),
+                box_px=box,
                 y_left_m=centres_y_m[i] + widths_m[i] / 2,
                 y_right_m=centres_y_m[i] - widths_m[i] / 2,
                 patch=patch,
-                px_per_m=size[0] / (c1 - c0) * width_px / widths_m[i],
+                px_per_m=patch.shape[1] / (box[2] - box[0]) * width_px / widths_m[i],
                 moving=moving[i],
                 tracked=on_track[i] is not None,
                 too_far=width_px / widths_m[i] < params.min_image_px_per_m,
             )
         )
     return tuple(areas)
+
+
+def _crop(
+    image: npt.NDArray[np.uint8], full_px: Rect, params: VehicleParams
+) -> tuple[tuple[int, int, int, int], npt.NDArray[np.uint8]] | None:
+    """Steps 3-4 for an area of pixel-edge bounds full_px: its integer bounds cropped to the
+    image and its patch resampled to at most `resampled_width_px` across (None when less
+    than 2 pixels of it lie inside the image either way)."""
+    h_img, w_img = image.shape
+    c0, r0 = max(0, math.ceil(full_px[0])), max(0, math.ceil(full_px[1]))
+    c1, r1 = min(w_img, math.ceil(full_px[2])), min(h_img, math.ceil(full_px[3]))
+    if c1 - c0 < 2 or r1 - r0 < 2:
+        return None
+    scale = min(1.0, params.resampled_width_px / (full_px[2] - full_px[0]))
+    size = (max(1, round((c1 - c0) * scale)), max(1, round((r1 - r0) * scale)))
+    crop = image[r0:r1, c0:c1]
+    # always a C-contiguous array of its own: the compiled searches then have one
+    # signature, loaded once from numba's cache instead of twice
+    patch: npt.NDArray[np.uint8] = (
+        crop.copy()
+        if scale == 1.0
+        else np.asarray(cv2.resize(crop, size, interpolation=cv2.INTER_LINEAR))
+    )
+    return (c0, r0, c1, r1), patch
+
+
+def taller(
+    area: SearchArea, image: npt.NDArray[np.uint8], factor: float, params: VehicleParams
+) -> SearchArea | None:
+    """The same area `factor` times as high, its bottom and sides where they were (beyond
+    the papers: `core.vehicle`, step 6, a tracked vehicle taller than the area); None when
+    it has no pixel more than the area inside the image."""
+    u0, v0, u1, v1 = area.full_px
+    full = (u0, v1 - factor * (v1 - v0), u1, v1)
+    cropped = _crop(image, full, params)
+    if cropped is None or cropped[0] == area.box_px:
+        return None
+    box, patch = cropped
+    return dataclasses.replace(area, full_px=full, box_px=box, patch=patch)

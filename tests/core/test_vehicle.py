@@ -481,6 +481,40 @@ def test_a_still_untracked_target_needs_more_symmetry(
         assert bool(detect_vehicles((a,), radar, cam, params).vehicles) == found
 
 
+def test_a_tracked_vehicle_taller_than_its_area_is_found_in_the_taller_area() -> None:
+    """Step 6, the taller area: a van 2 m wide and 2.5 m high 20 m ahead whose lower part,
+    all the area holds, is as grey as the background (no side edges there) and whose upper
+    part is dark. Its tracked target's area holds no axis; the area 2.5 times as high does,
+    and the van is found there, 2 m wide. A still target, no image, or the papers' factor 1
+    leave it unfound."""
+    cam = flat_camera()
+    f, x_m, base_v = 800.0, 20.0, 239.5 + 800.0 * 1.2 / 20.0  # the road row at 20 m
+    image = np.full((480, 640), 100, np.uint8)
+    image[round(base_v) :] = 160  # the road, brighter than the van's lower part
+    half_px, top_v = f * 1.0 / x_m, base_v - f * 2.5 / x_m
+    rows = slice(round(top_v), round(base_v - f * 1.0 / x_m))  # 1.0-2.5 m above the road
+    image[rows, round(319.5 - half_px) : round(319.5 + half_px)] = 30
+    image = cv2.GaussianBlur(image, (5, 5), 1.0)  # a lens's blur: no pixel-sharp steps
+    radar = (target(x_m, 0.0),)
+    (area,) = search_areas(image, cam, radar, PARAMS, tracked_m=[(x_m, 0.0)])
+    assert area.tracked and area.full_px[1] > base_v - f * 1.0 / x_m  # the dark part is above
+    found = detect_vehicles((area,), radar, cam, PARAMS, image=image)
+    (r,) = found.targets
+    assert r.taller and r.verdict == "vehicle"
+    assert r.area.full_px[3] == area.full_px[3]
+    assert r.area.full_px[3] - r.area.full_px[1] == pytest.approx(
+        PARAMS.tracked_taller_area_factor * (area.full_px[3] - area.full_px[1])
+    )
+    (v,) = found.vehicles
+    assert v.width_m == pytest.approx(2.0, abs=0.15)
+    assert v.lateral_m == pytest.approx(0.0, abs=0.1)
+    papers = dataclasses.replace(PARAMS, tracked_taller_area_factor=1.0)
+    still = dataclasses.replace(area, tracked=False, moving=True)
+    for a, params, img in ((area, PARAMS, None), (area, papers, image), (still, PARAMS, image)):
+        (r,) = detect_vehicles((a,), radar, cam, params, image=img).targets
+        assert r.verdict == "no_symmetry" and not r.taller
+
+
 @pytest.mark.parametrize(
     ("x_m", "y_m", "height_m"),
     [(20.0, -3.0, 1.5), (20.0, 3.5, 1.0), (12.0, 0.0, 1.5), (40.0, -7.0, 3.5)],
