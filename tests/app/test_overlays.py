@@ -461,8 +461,13 @@ def test_every_layer_of_an_engine_frame_draws_something_and_draw_layers_on_a_cop
     for name, layer in overlays.LAYERS.items():
         if name == "pedestrians":
             continue  # the highway has no people, and no false ones are kept on this frame
+        if name == "coasting tracks":
+            continue  # every confirmed track is measured on this frame
         out = drawn(layer, rgb, result)
         assert (out != rgb).any(), name  # the highway frame has something for every other layer
+    before_rgb = draw.grey_to_rgb(engine_image("highway", 89))  # a vehicle track coasts
+    coasting = drawn(overlays.LAYERS["coasting tracks"], before_rgb, engine_result("highway", 89))
+    assert (coasting != before_rgb).any()
     people = drawn(
         overlays.LAYERS["pedestrians"],
         draw.grey_to_rgb(engine_image("stop_and_go", 30)),
