@@ -333,6 +333,8 @@ def update_tracks(
     if params.tracking.coasting_boxes_follow:
         tracks = coasting_boxes(tracks, camera)
     length_m = params.vehicle.body_length_m
+    if length_m == 0:
+        return tracks  # the papers' boxes: no body (Track.outline_px is box_px)
     return dataclasses.replace(
         tracks,
         tracks=tuple(
