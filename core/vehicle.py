@@ -648,7 +648,9 @@ def detect_vehicles(
             width_m[j],
             vision_m[j],
             tuple(sorted(ts)),
-            body_box(box, distances_m[j], camera, params.body_length_m),
+            body_box(box, distances_m[j], camera, params.body_length_m)
+            if params.body_length_m > 0
+            else None,
         )
         for j, (box, ts) in enumerate(merged)
     )

@@ -557,7 +557,7 @@ def test_a_detected_vehicle_carries_its_body(
     assert v.outline_px == v.body_px == body_box(v.box_px, v.distance_m, cam, PARAMS.body_length_m)
     papers = dataclasses.replace(PARAMS, body_length_m=0.0)
     (p,) = detect_vehicles(search_areas(image, cam, radar, papers), radar, cam, papers).vehicles
-    assert p.outline_px == p.box_px
+    assert p.body_px is None and p.outline_px == p.box_px  # as a track without a body
 
 
 def test_radar_point_beside_the_car_finds_nothing(
