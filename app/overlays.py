@@ -44,6 +44,7 @@ from app.draw import (
     put_tag,
     require_rgb_image,
 )
+from core.appearance import AppearanceMatch
 from core.camera import CameraModel
 from core.engine import FrameResult
 from core.guardrail import GuardRailCheck
@@ -192,12 +193,15 @@ def put_search_areas(
     out: RgbImage,
     areas: Sequence[SearchArea],
     searched: Sequence[tuple[SearchArea, int]] = (),
+    looks: Sequence[AppearanceMatch] = (),
 ) -> None:
     """In place: the cropped search area of each radar target (`SearchArea.box_px`), one
-    pixel thick, in `SEARCH_AREA_COLOUR`; and in dashes, tagged "#id", each area searched for
-    a track that no radar target returned (`core.track_search`).
+    pixel thick, in `SEARCH_AREA_COLOUR`; in dashes, tagged "#id", each area searched for
+    a track that no radar target returned (`core.track_search`); and in dashes, tagged
+    "#id look", each box where a track's look was found (`core.appearance`).
 
-    areas: `FrameResult.areas`; searched: (area, track id) pairs.
+    areas: `FrameResult.areas`; searched: (area, track id) pairs; looks:
+    `FrameResult.appearance`.
     """
     require_rgb_image("out", out)
     for area in areas:
@@ -207,6 +211,10 @@ def put_search_areas(
         c0, r0, c1, r1 = area.box_px
         _outline(out, exclusive_to_edges((c0, r0, c1, r1)), SEARCH_AREA_COLOUR, 1, dashed=True)
         _tag(out, f"#{track_id}", c0, r0 - 1, SEARCH_AREA_COLOUR)
+    for look in looks:
+        _outline(out, look.vehicle.box_px, SEARCH_AREA_COLOUR, 1, dashed=True)
+        c0, r0, _, _ = box_pixels(look.vehicle.box_px)
+        _tag(out, f"#{look.track_id} look", c0, r0 - 1, SEARCH_AREA_COLOUR)
 
 
 def put_vehicle_boxes(
@@ -443,7 +451,7 @@ def _radar_layer(out: RgbImage, r: FrameResult) -> None:
 def _areas_layer(out: RgbImage, r: FrameResult) -> None:
     search = r.track_search
     pairs = zip((t.area for t in search.search.targets), search.track_ids, strict=True)
-    put_search_areas(out, r.areas, [(a, i) for a, i in pairs if a is not None])
+    put_search_areas(out, r.areas, [(a, i) for a, i in pairs if a is not None], r.appearance)
 
 
 def _vehicles_layer(out: RgbImage, r: FrameResult) -> None:

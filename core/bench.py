@@ -333,6 +333,7 @@ def _tracking_cases(drive: Drive, pairs: Sequence[Pair], params: Params) -> list
                 result.areas,
                 result.guardrail.guard_rail_targets,
                 result.track_search,
+                result.appearance,
             )
         )
         ego = frame.ego if last is not None else None

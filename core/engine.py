@@ -68,10 +68,12 @@ import dataclasses
 import threading
 import time
 from collections import OrderedDict
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
+from types import MappingProxyType
 from typing import Protocol, TypeVar
 
+from core.appearance import AppearanceMatch, Template, find_by_appearance, remember
 from core.camera import CameraModel
 from core.ego import NS_PER_S, EgoMotion
 from core.guardrail import GuardRailResult, detect_guard_rails
@@ -148,7 +150,8 @@ class FrameResult:
     lines, `core.rail_lines`); rail_lines: those lines; vehicle, pedestrian: the papers'
     per-frame detections (vehicle's vehicles end with those `track_search` found, which have
     no radar target); track_search: the vision searches for tracked vehicles no radar
-    target returned (`core.track_search`);
+    target returned (`core.track_search`); appearance: the tracked vehicles found by their
+    look after both (`core.appearance`; measurements of their tracks, not detections);
     tracking: every live track after this frame; tracked_vehicles / tracked_pedestrians:
     the confirmed tracks of each kind; tracked_guard_rails: indices of this frame's radar
     targets labelled guard rail and associated with a confirmed guard-rail track;
@@ -174,6 +177,7 @@ class FrameResult:
     from_start: bool = False
     rail_lines: tuple[RailLine, ...] = ()
     track_search: TrackSearchResult = NOTHING_SEARCHED
+    appearance: tuple[AppearanceMatch, ...] = ()
 
     @property
     def tracked_vehicles(self) -> tuple[Track, ...]:
@@ -217,6 +221,7 @@ class EngineState:
     vehicle_boxes: tuple[Box, ...]
     radar_points: tuple[RememberedPoint, ...]
     rail_returns: RailReturns
+    templates: Mapping[int, Template]  # core.appearance, by track id
     last: _LastFrame
 
 
@@ -284,11 +289,13 @@ def tracker_measurements(
     areas: tuple[SearchArea, ...],
     guard_rails: frozenset[int],
     searched: TrackSearchResult = NOTHING_SEARCHED,
+    appearance: Sequence[AppearanceMatch] = (),
 ) -> list[Measurement]:
     """This frame's detections as the tracker's measurements: vehicles at the radar's
     distance with vision's lateral position and width (the last ones, those `searched`
-    found, for the tracks they were searched for), kept pedestrians where their base meets
-    the road, guard-rail targets at the radar's position."""
+    found, for the tracks they were searched for; then the `appearance` matches, source
+    indices after the vehicles', each for its track), kept pedestrians where their base
+    meets the road, guard-rail targets at the radar's position."""
     first_searched = len(vehicle.vehicles) - len(searched.vehicles)
     out = [
         Measurement(
@@ -301,6 +308,18 @@ def tracker_measurements(
             None if i < first_searched else searched.track_of[i - first_searched],
         )
         for i, v in enumerate(vehicle.vehicles)
+    ]
+    out += [
+        Measurement(
+            "vehicle",
+            m.vehicle.distance_m,
+            m.vehicle.lateral_m,
+            m.vehicle.width_m,
+            m.vehicle.box_px,
+            len(vehicle.vehicles) + k,
+            m.track_id,
+        )
+        for k, m in enumerate(appearance)
     ]
     out += [
         Measurement("pedestrian", p.distance_m, p.lateral_m, p.width_m, p.extended_box_px, i)
@@ -384,6 +403,7 @@ class FusionEngine:
         self._vehicle_boxes: tuple[Box, ...] = ()
         self._radar_points: tuple[RememberedPoint, ...] = ()
         self._rail_returns = RailReturns.none()
+        self._templates: Mapping[int, Template] = MappingProxyType({})
         self._last: _LastFrame | None = None
         # after a start over: is the next frame's result from the start (a frame that cannot
         # be read within a from-start run breaks the drive as it breaks a playback)
@@ -415,6 +435,7 @@ class FusionEngine:
         self._vehicle_boxes = ()
         self._radar_points = ()
         self._rail_returns = RailReturns.none()
+        self._templates = MappingProxyType({})
         self._last = None
         self._next_from_start = from_start
 
@@ -426,6 +447,7 @@ class FusionEngine:
             self._vehicle_boxes,
             self._radar_points,
             self._rail_returns,
+            self._templates,
             last,
         )
 
@@ -454,6 +476,7 @@ class FusionEngine:
         self._vehicle_boxes = state.vehicle_boxes
         self._radar_points = state.radar_points
         self._rail_returns = state.rail_returns
+        self._templates = state.templates
         self._last = state.last
 
     def _nearest_kept(self, index: int, window: int) -> int | None:
@@ -630,6 +653,11 @@ class FusionEngine:
             return VehicleResult(found.targets, found.vehicles + searched.vehicles), searched
 
         (vehicle, searched), vehicle_ms = _timed(vehicles)
+        appearance, appearance_ms = _timed(
+            lambda: find_by_appearance(
+                image, camera, predicted, self._templates, vehicle.vehicles, p.vehicle
+            )
+        )
         boxes = tuple(v.outline_px for v in vehicle.vehicles)
         pedestrian, pedestrian_ms = _timed(
             lambda: detect_pedestrians(
@@ -644,13 +672,19 @@ class FusionEngine:
             )
         )
         measurements = tracker_measurements(
-            vehicle, pedestrian, areas, rails.guard_rail_targets, searched
+            vehicle, pedestrian, areas, rails.guard_rail_targets, searched, appearance
         )
 
         tracks, tracking_ms = _timed(
             lambda: update_tracks(self._tracker, measurements, ego, dt_s, camera, p)
         )
         # read-only: the next frame reads it, and a kept state holds it by reference
+        radar_vehicles = len(vehicle.vehicles) - len(searched.vehicles)
+        self._templates = MappingProxyType(
+            remember(
+                self._templates, tracks.tracks, image, vehicle.vehicles, radar_vehicles, p.vehicle
+            )
+        )
         pitch.memory.row_histogram.flags.writeable = False
         self._pitch_memory = pitch.memory
         self._vehicle_boxes = boxes
@@ -665,11 +699,17 @@ class FusionEngine:
             guardrail=rails,
             rail_lines=rail_lines,
             track_search=searched,
+            appearance=appearance,
             vehicle=vehicle,
             pedestrian=pedestrian,
             tracking=tracks,
             timings=StageTimings(
-                pitch_ms, motion_ms, rails_ms, vehicle_ms, pedestrian_ms, tracking_ms
+                pitch_ms,
+                motion_ms,
+                rails_ms,
+                vehicle_ms,
+                pedestrian_ms,
+                tracking_ms + appearance_ms,
             ),
             replayed=0,
             from_start=from_start,

@@ -191,6 +191,13 @@ class VehicleParams:
     track_search_frames: int = 2
     track_search_hidden_fraction: float = 0.2
     track_search_agreement_m: float = 0.3
+    # beyond the papers (core/appearance.py): a confirmed vehicle track that neither a radar
+    # target's vehicle nor the track search framed on this frame is looked for by its look,
+    # the patch of its last radar vehicle's box (kept appearance_max_age_frames frames; 0:
+    # off, the papers' preset), matched by normalised cross-correlation of at least
+    # appearance_min_ncc; the match must agree with the track as the track search's does
+    appearance_max_age_frames: int = 5
+    appearance_min_ncc: float = 0.8
     # beyond the papers (core/radar_smoothing.py): each area is centred on its radar point's
     # lateral position averaged over about lateral_smoothing_s of scans, a point pairing with
     # the last scans' within lateral_smoothing_gate_m across (the papers' preset: 0, every
@@ -321,6 +328,18 @@ class VehicleParams:
             "track_search_frames",
             "a whole number of frames >= 0 (0: off)",
             self.track_search_frames,
+        )
+        _check(
+            self.appearance_max_age_frames >= 0,
+            "appearance_max_age_frames",
+            "a whole number of frames >= 0 (0: off)",
+            self.appearance_max_age_frames,
+        )
+        _check(
+            math.isfinite(self.appearance_min_ncc) and -1 <= self.appearance_min_ncc <= 1,
+            "appearance_min_ncc",
+            "a correlation in -1 .. 1",
+            self.appearance_min_ncc,
         )
         _check(
             math.isfinite(self.lateral_smoothing_s) and self.lateral_smoothing_s >= 0,

@@ -126,7 +126,8 @@ def _vehicle_estimates(result: FrameResult) -> list[Estimate]:
 
 
 def _track_estimates(result: FrameResult) -> list[Estimate]:
-    found = result.vehicle.vehicles
+    # a track's source_index indexes the frame's vehicles, then its appearance matches
+    found = result.vehicle.vehicles + tuple(m.vehicle for m in result.appearance)
     return [
         Estimate(
             t.x_m,

@@ -12,6 +12,7 @@ from app_fakes import HEIGHT_PX, WIDTH_PX, fake_camera
 from engine_frames import engine_image, engine_result
 
 from app import draw, overlays
+from core.appearance import AppearanceMatch
 from core.guardrail import GuardRailCheck
 from core.io.frame import RadarTarget
 from core.pedestrian import PedestrianCandidate
@@ -217,6 +218,12 @@ def test_a_vehicle_without_radar_and_a_searched_area_are_drawn_in_dashes() -> No
     grey = is_colour(out, overlays.SEARCH_AREA_COLOUR)
     assert grey[200, 100 : 100 + d].all() and not grey[200, 100 + d : 100 + 2 * d].any()
     assert grey[185:199, 100:120].any()  # the "#12" tag
+    # where track 12's look was found (core.appearance): its box dashed, tagged "#12 look"
+    look = AppearanceMatch(12, vehicle((99.5, 199.5, 180.5, 260.5)), 0.9)
+    out = drawn(overlays.put_search_areas, black(), [], [], [look])
+    grey = is_colour(out, overlays.SEARCH_AREA_COLOUR)
+    assert grey[200, 100 : 100 + d].all() and not grey[200, 100 + d : 100 + 2 * d].any()
+    assert grey[185:199, 100:150].any() and not grey[185:199, 160:].any()  # the tag
 
 
 def test_box_pixels_hold_the_edges_of_a_box() -> None:
@@ -465,8 +472,8 @@ def test_every_layer_of_an_engine_frame_draws_something_and_draw_layers_on_a_cop
             continue  # every confirmed track is measured on this frame
         out = drawn(layer, rgb, result)
         assert (out != rgb).any(), name  # the highway frame has something for every other layer
-    before_rgb = draw.grey_to_rgb(engine_image("highway", 89))  # a vehicle track coasts
-    coasting = drawn(overlays.LAYERS["coasting tracks"], before_rgb, engine_result("highway", 89))
+    before_rgb = draw.grey_to_rgb(engine_image("highway", 97))  # a vehicle track coasts
+    coasting = drawn(overlays.LAYERS["coasting tracks"], before_rgb, engine_result("highway", 97))
     assert (coasting != before_rgb).any()
     people = drawn(
         overlays.LAYERS["pedestrians"],
