@@ -10,14 +10,17 @@
    its point smoothed over the last scans, `core.radar_smoothing`), and the guard-rail
    filter on the slow ones (paper 002), with the lines of the rail returns it found over
    the last seconds (`core.rail_lines`);
-5. vehicle detection by symmetry on the others (II-C, paper 001);
+5. vehicle detection by symmetry on the others (II-C, paper 001), then the vision searches
+   for the vehicles it follows that no radar target returned (`core.track_search`) and
+   for those still unframed by their look (`core.appearance`), beyond the papers;
 6. pedestrian detection with both fusion filters (II-D);
 7. tracking of vehicles, pedestrians and guard-rail targets (`core.tracking`, beyond the
    papers).
 
 The engine is the only module that knows this order. It owns what crosses frames: the pitch
 memory, the previous frame's vehicle boxes, the remembered radar points and rail returns,
-motion stereo's background and the tracker.
+the tracked vehicles' looks (`core.appearance`), motion stereo's background and the
+tracker.
 `process` expects frames in order; `seek(drive, index)` brings the engine to any frame of a
 drive: a frame a little ahead is reached by processing the frames in between (as playback
 skipping frames would), any other by resetting that state and replaying the
@@ -616,7 +619,9 @@ class FusionEngine:
 
         predicted = (
             self._tracker.predicted("vehicle", ego, dt_s)
-            if p.vehicle.track_gate_m > 0 or p.vehicle.track_search_frames > 0
+            if p.vehicle.track_gate_m > 0
+            or p.vehicle.track_search_frames > 0
+            or p.vehicle.appearance_max_age_frames > 0
             else ()
         )
 
@@ -678,13 +683,13 @@ class FusionEngine:
         tracks, tracking_ms = _timed(
             lambda: update_tracks(self._tracker, measurements, ego, dt_s, camera, p)
         )
-        # read-only: the next frame reads it, and a kept state holds it by reference
         radar_vehicles = len(vehicle.vehicles) - len(searched.vehicles)
         self._templates = MappingProxyType(
             remember(
                 self._templates, tracks.tracks, image, vehicle.vehicles, radar_vehicles, p.vehicle
             )
         )
+        # read-only: the next frame reads it, and a kept state holds it by reference
         pitch.memory.row_histogram.flags.writeable = False
         self._pitch_memory = pitch.memory
         self._vehicle_boxes = boxes
