@@ -194,7 +194,8 @@ def find_by_appearance(
         if min(size) < MIN_TEMPLATE_PX:
             continue
         shrink = cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR
-        match = _match(image, cv2.resize(template.patch, size, interpolation=shrink), expected)
+        scaled = np.asarray(cv2.resize(template.patch, size, interpolation=shrink), np.uint8)
+        match = _match(image, scaled, expected)
         if match is None or not match[0] >= params.appearance_min_ncc:
             continue
         ncc, box = match
