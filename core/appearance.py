@@ -126,8 +126,11 @@ def remember(
 
     tracks: every track after the update; vehicles: the frame's vehicles, the first
     `radar_vehicles` from radar targets (source_index of a track's measurement indexes
-    them); templates: those kept after the last frame."""
+    them); templates: those kept after the last frame. None when the search is off
+    (`appearance_max_age_frames` 0)."""
     kept: dict[int, Template] = {}
+    if params.appearance_max_age_frames == 0:
+        return kept
     for t in tracks:
         if t.kind != "vehicle" or not t.confirmed:
             continue

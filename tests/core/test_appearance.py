@@ -108,6 +108,9 @@ def test_a_template_ages_without_radar_vehicles_and_is_forgotten(
     # measured by a vehicle found without radar (the track search's): no new template
     searched = [track(NEAR_X_M, misses=0, source=0)]
     assert remember({}, searched, near, [symmetry_box(near, NEAR_X_M)], 0, PARAMS) == {}
+    off = dataclasses.replace(PARAMS, appearance_max_age_frames=0)  # the papers' preset
+    measured = [track(NEAR_X_M, misses=0, source=0)]
+    assert remember({}, measured, near, [symmetry_box(near, NEAR_X_M)], 1, off) == {}
     tentative = [dataclasses.replace(track(NEAR_X_M, misses=0, source=0), confirmed=False)]
     assert remember({}, tentative, near, [symmetry_box(near, NEAR_X_M)], 1, PARAMS) == {}
 
