@@ -155,6 +155,23 @@ def changed_pixels(page: Page, image: Locator, before: str, top_px: int = 0) -> 
     raise AssertionError(f"{image}: the picture did not change in {TIMEOUT_MS} ms")
 
 
+def shows_pixels(page: Page, image: Locator, expected: str, top_px: int = 0) -> bool:
+    """Whether `image` comes to show the pixels `expected` (from row `top_px` down; a digest
+    of `pixels`) within TIMEOUT_MS with the read-out calling it neither a preview nor
+    settling: on a loaded machine a picture from another state can show for a while before
+    the exact one replaces it."""
+    provisional = (
+        page.locator("code")
+        .filter(has_text=PREVIEW_NOTE)
+        .or_(page.locator("code").filter(has_text=SETTLING_NOTE))
+    )
+    for _ in range(TIMEOUT_MS // 100):
+        if pixels(image, top_px) == expected and provisional.count() == 0:
+            return True
+        page.wait_for_timeout(100)
+    return False
+
+
 def field(page: Page, label: str) -> Locator:
     """The visible input of the control labelled `label` (a parameter's field once its
     folder is open). viser's text fields do not tie their label to the input, so the input
