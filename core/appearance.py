@@ -13,7 +13,7 @@ without them although the vehicle looks as it did. So:
 2. search: a confirmed track as the tracker predicts it on this frame
    (`core.tracking.Tracker.predicted`) with a template and with no vehicle of the frame
    overlapping its expected box (`core.tracking.expected_boxes`) by more than
-   `merge_overlap_fraction` of the smaller box: its template, scaled by template distance
+   DETECTED_OVERLAP of the smaller box: its template, scaled by template distance
    / predicted distance, is matched by normalised cross-correlation (OpenCV's
    TM_CCOEFF_NORMED) over the expected box widened by half the scaled template's width on
    either side and by 30 % of its height above and below (SEARCH_MARGIN_*), plus
@@ -185,10 +185,11 @@ def find_by_appearance(
         return ()
     found: list[AppearanceMatch] = []
     taken = [v.box_px for v in vehicles]
-    for t, expected in zip(predicted, expected_boxes(predicted, camera), strict=True):
-        template = templates.get(t.id)
-        if template is None or expected is None or not t.x_m > 0:
+    looked_for = [t for t in predicted if t.id in templates and t.x_m > 0]
+    for t, expected in zip(looked_for, expected_boxes(looked_for, camera), strict=True):
+        if expected is None:
             continue
+        template = templates[t.id]
         if any(overlap_of_smaller(expected, b) > DETECTED_OVERLAP for b in taken):
             continue
         scale = template.distance_m / t.x_m

@@ -134,17 +134,22 @@ def stage_top_px(drive_path: Path) -> int:
     return height_px + STRIP_HEIGHT_PX + STAGE_GAP_PX
 
 
+def _provisional(page: Page) -> Locator:
+    """The read-out's note that the picture shown is a preview or a settling replay."""
+    return (
+        page.locator("code")
+        .filter(has_text=PREVIEW_NOTE)
+        .or_(page.locator("code").filter(has_text=SETTLING_NOTE))
+    )
+
+
 def changed_pixels(page: Page, image: Locator, before: str, top_px: int = 0) -> str:
     """Wait until `image` shows other pixels than `before` (from row `top_px` down), the
     same on two reads 100 ms apart (a read while the page swaps pictures can catch one half
     drawn), and the read-out does not call it a preview or settling (after a parameter
     change the exact picture replaces the preview once the value has rested, which can be
     well over 100 ms later, and the from-start one replaces a settling replay); its digest."""
-    provisional = (
-        page.locator("code")
-        .filter(has_text=PREVIEW_NOTE)
-        .or_(page.locator("code").filter(has_text=SETTLING_NOTE))
-    )
+    provisional = _provisional(page)
     last = before
     for _ in range(TIMEOUT_MS // 100):
         now = pixels(image, top_px)
@@ -160,11 +165,7 @@ def shows_pixels(page: Page, image: Locator, expected: str, top_px: int = 0) -> 
     of `pixels`) within TIMEOUT_MS with the read-out calling it neither a preview nor
     settling: on a loaded machine a picture from another state can show for a while before
     the exact one replaces it."""
-    provisional = (
-        page.locator("code")
-        .filter(has_text=PREVIEW_NOTE)
-        .or_(page.locator("code").filter(has_text=SETTLING_NOTE))
-    )
+    provisional = _provisional(page)
     for _ in range(TIMEOUT_MS // 100):
         if pixels(image, top_px) == expected and provisional.count() == 0:
             return True
