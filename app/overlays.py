@@ -25,7 +25,6 @@ covers a pixel outside the box.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Collection, Mapping, Sequence
 
 import cv2
@@ -50,7 +49,7 @@ from core.engine import FrameResult
 from core.guardrail import GuardRailCheck
 from core.pedestrian import CONSTRAINT_VERDICTS, FUSION_VERDICTS, PedestrianCandidate
 from core.pitch import Lines, PitchResult
-from core.search_area import SearchArea
+from core.search_area import SearchArea, box_pixels
 from core.tracking import Track
 from core.vehicle import TargetResult, Vehicle
 
@@ -112,15 +111,6 @@ def radar_colour(verdict: str) -> Rgb:
     if verdict == "guard_rail":
         return RADAR_GUARD_RAIL_COLOUR
     return RADAR_DISCARDED_COLOUR
-
-
-def box_pixels(box_edges_px: Box) -> tuple[int, int, int, int]:
-    """(col0, row0, col1, row1) inclusive: the pixels holding the edges of a pixel-edge box
-    (u0, v0, u1, v1), a pixel being inside up to half of it."""
-    u0, v0, u1, v1 = box_edges_px
-    c0, r0 = math.floor(u0 + 0.5), math.floor(v0 + 0.5)
-    c1, r1 = math.ceil(u1 - 0.5), math.ceil(v1 - 0.5)
-    return c0, r0, max(c0, c1), max(r0, r1)
 
 
 def exclusive_to_edges(box_px: Box) -> Box:

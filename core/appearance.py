@@ -54,6 +54,11 @@ Notes:
       per frame over 0.05 (a prediction 0.5-1 m short of a vehicle pulling away in a
       queue); a distance from the best of five template scales (0.96-1.04) was worse (FP
       0.07-0.10 per frame). The distance stays the prediction, as the track search's.
+    - Steps 1-2 cut templates and search windows on the pixels holding a box's edges
+      (`core.search_area.box_pixels`, as the inspector draws boxes); the first version
+      rounded each edge to the nearest pixel border. Held out, radar-seen MOTA 0.719 /
+      0.562 / 0.524 -> 0.718 / 0.560 / 0.525; seeds 1313-1717 + 2727 0.727 / 0.629 / 0.496
+      -> 0.736 / 0.631 / 0.485.
 """
 
 from __future__ import annotations
@@ -67,6 +72,7 @@ import numpy.typing as npt
 
 from core.camera import CameraModel
 from core.params import VehicleParams
+from core.search_area import box_pixels
 from core.tracking import Track, expected_boxes
 from core.vehicle import Vehicle, overlap_of_smaller, world_extents
 
@@ -108,10 +114,10 @@ class AppearanceMatch:
 
 
 def _pixels(box: Box, shape: tuple[int, ...]) -> tuple[int, int, int, int]:
-    """The whole pixels (col0, row0, col1, row1), end exclusive, of a box in pixel-edge
-    coordinates, cut at the image border."""
-    u0, v0, u1, v1 = (round(c + 0.5) for c in box)
-    return max(u0, 0), max(v0, 0), min(u1, shape[1]), min(v1, shape[0])
+    """The pixels (col0, row0, col1, row1), end exclusive, holding a pixel-edge box
+    (`core.search_area.box_pixels`), cut at the image border."""
+    c0, r0, c1, r1 = box_pixels(box)
+    return max(c0, 0), max(r0, 0), min(c1 + 1, shape[1]), min(r1 + 1, shape[0])
 
 
 def remember(

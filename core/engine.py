@@ -128,9 +128,9 @@ class StageTimings:
     pitch_ms: float
     motion_stereo_ms: float
     guardrail_ms: float  # search areas included
-    vehicle_ms: float
+    vehicle_ms: float  # the track search and the search by look included
     pedestrian_ms: float
-    tracking_ms: float
+    tracking_ms: float  # the looks kept for the next frame included
 
     @property
     def total_ms(self) -> float:
@@ -648,21 +648,20 @@ class FusionEngine:
 
         (areas, rails, rail_lines), rails_ms = _timed(guard)
 
-        def vehicles() -> tuple[VehicleResult, TrackSearchResult]:
+        def vehicles() -> tuple[VehicleResult, TrackSearchResult, tuple[AppearanceMatch, ...]]:
             found = detect_vehicles(
                 areas, frame.radar, camera, p.vehicle, rails.guard_rail_targets, image
             )
             searched = search_tracks(
                 image, camera, predicted, frame.radar, found, p.vehicle, frame.speed_mps
             )
-            return VehicleResult(found.targets, found.vehicles + searched.vehicles), searched
-
-        (vehicle, searched), vehicle_ms = _timed(vehicles)
-        appearance, appearance_ms = _timed(
-            lambda: find_by_appearance(
+            vehicle = VehicleResult(found.targets, found.vehicles + searched.vehicles)
+            looks = find_by_appearance(
                 image, camera, predicted, self._templates, vehicle.vehicles, p.vehicle
             )
-        )
+            return vehicle, searched, looks
+
+        (vehicle, searched, appearance), vehicle_ms = _timed(vehicles)
         boxes = tuple(v.outline_px for v in vehicle.vehicles)
         pedestrian, pedestrian_ms = _timed(
             lambda: detect_pedestrians(
@@ -680,15 +679,22 @@ class FusionEngine:
             vehicle, pedestrian, areas, rails.guard_rail_targets, searched, appearance
         )
 
-        tracks, tracking_ms = _timed(
-            lambda: update_tracks(self._tracker, measurements, ego, dt_s, camera, p)
-        )
-        radar_vehicles = len(vehicle.vehicles) - len(searched.vehicles)
-        self._templates = MappingProxyType(
-            remember(
-                self._templates, tracks.tracks, image, vehicle.vehicles, radar_vehicles, p.vehicle
+        def track() -> TrackResult:
+            tracks = update_tracks(self._tracker, measurements, ego, dt_s, camera, p)
+            radar_vehicles = len(vehicle.vehicles) - len(searched.vehicles)
+            self._templates = MappingProxyType(
+                remember(
+                    self._templates,
+                    tracks.tracks,
+                    image,
+                    vehicle.vehicles,
+                    radar_vehicles,
+                    p.vehicle,
+                )
             )
-        )
+            return tracks
+
+        tracks, tracking_ms = _timed(track)
         # read-only: the next frame reads it, and a kept state holds it by reference
         pitch.memory.row_histogram.flags.writeable = False
         self._pitch_memory = pitch.memory
@@ -714,7 +720,7 @@ class FusionEngine:
                 rails_ms,
                 vehicle_ms,
                 pedestrian_ms,
-                tracking_ms + appearance_ms,
+                tracking_ms,
             ),
             replayed=0,
             from_start=from_start,

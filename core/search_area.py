@@ -175,6 +175,15 @@ def intersection_area(a: Rect, b: Rect) -> float:
     return rect_area((max(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), min(a[3], b[3])))
 
 
+def box_pixels(box_edges_px: Rect) -> tuple[int, int, int, int]:
+    """(col0, row0, col1, row1) inclusive: the pixels holding the edges of a pixel-edge box
+    (u0, v0, u1, v1), a pixel being inside up to half of it (pixel centres at integers)."""
+    u0, v0, u1, v1 = box_edges_px
+    c0, r0 = math.floor(u0 + 0.5), math.floor(v0 + 0.5)
+    c1, r1 = math.ceil(u1 - 0.5), math.ceil(v1 - 0.5)
+    return c0, r0, max(c0, c1), max(r0, r1)
+
+
 def iou(a: Rect, b: Rect) -> float:
     """Intersection over union of two image rectangles (0 when both are empty)."""
     shared = intersection_area(a, b)

@@ -226,9 +226,7 @@ def test_a_vehicle_without_radar_and_a_searched_area_are_drawn_in_dashes() -> No
     assert grey[185:199, 100:150].any() and not grey[185:199, 160:].any()  # the tag
 
 
-def test_box_pixels_hold_the_edges_of_a_box() -> None:
-    assert overlays.box_pixels((99.5, 199.5, 180.5, 260.5)) == (100, 200, 180, 260)
-    assert overlays.box_pixels((100.2, 200.0, 179.9, 259.6)) == (100, 200, 180, 260)
+def test_exclusive_boxes_become_pixel_edges() -> None:
     assert overlays.exclusive_to_edges((10, 20, 50, 40)) == (9.5, 19.5, 49.5, 39.5)
 
 

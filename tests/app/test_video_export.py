@@ -29,6 +29,7 @@ from app.view import AB_GAP_PX
 from core.cli import DEFAULT_RECORDINGS, main
 from core.io.drive import Drive
 from core.params import Params, params_hash, save_params
+from core.search_area import box_pixels
 
 HIGHWAY = DEFAULT_RECORDINGS / "highway"
 CLIP = (FRAME, FRAME + 2)  # frame 90 of the highway first: vehicles on it
@@ -127,7 +128,7 @@ def test_vehicle_boxes_are_drawn_where_the_engines_result_puts_them(
     result = engine_result("highway", FRAME)  # what the inspector shows
     assert result.vehicle.vehicles, "frame 90 of the highway has vehicles"
     for vehicle in result.vehicle.vehicles:
-        box = overlays.box_pixels(vehicle.box_px)
+        box = box_pixels(vehicle.box_px)
         on = np.median(_outline(frames[0], box), axis=0)
         assert np.abs(on - overlays.VEHICLE_COLOUR).max() <= CHANNEL_TOLERANCE, (box, on)
         c0, r0, c1, r1 = box

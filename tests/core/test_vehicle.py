@@ -14,7 +14,7 @@ from roadscenes import RoadRenderer, camera, straight_road
 from core.camera import CameraModel, Extrinsics, Intrinsics
 from core.io.frame import RadarTarget
 from core.params import ParamsError, VehicleParams
-from core.search_area import SearchArea, overlap_fraction, search_areas
+from core.search_area import SearchArea, box_pixels, overlap_fraction, search_areas
 from core.symmetry import (
     AXIS,
     HALF_PX,
@@ -214,6 +214,12 @@ def test_overlap_fraction_is_the_share_of_the_second_area() -> None:
 
 
 # --- symmetry ----------------------------------------------------------------------------
+
+
+def test_box_pixels_hold_the_edges_of_a_box() -> None:
+    assert box_pixels((99.5, 199.5, 180.5, 260.5)) == (100, 200, 180, 260)
+    assert box_pixels((100.2, 200.0, 179.9, 259.6)) == (100, 200, 180, 260)
+    assert box_pixels((10.5, 20.5, 10.5, 20.5)) == (11, 21, 11, 21)  # empty: one pixel
 
 
 def test_chi_by_hand_on_a_ten_pixel_row() -> None:
