@@ -76,6 +76,10 @@ class PitchParams:
     min_confidence: float = 200.0  # below this summed weight, horizon tracking takes over
     # ... and above this weighted RMS distance of the intersections from their mean (curves)
     max_spread_px: float = 6.0
+    # beyond the paper: a vanishing point whose horizon lies more than this many rows from
+    # the previous frame's is taken for a curve's stray lines, and horizon tracking takes
+    # over (11: 0.8 deg at fy 773 px; 0: no such check, the papers' preset; core/pitch.py)
+    max_vp_jump_px: float = 11.0
     # largest row shift per frame searched by horizon tracking (~0.3 deg at 10 fps)
     max_tracking_offset_px: int = 4
     # share of the way back to the calibrated horizon taken on each tracked frame
@@ -109,6 +113,12 @@ class PitchParams:
             self.tracking_rows_above_vp_px,
         )
         _fraction(self, "tracking_pull")
+        _check(
+            math.isfinite(self.max_vp_jump_px) and self.max_vp_jump_px >= 0,
+            "max_vp_jump_px",
+            "a finite number of rows >= 0",
+            self.max_vp_jump_px,
+        )
         _check(
             self.max_tracking_offset_px >= 0,
             "max_tracking_offset_px",

@@ -362,6 +362,30 @@ def test_drawn_lines_give_their_vanishing_point_and_eq_2_pitch() -> None:
     assert r.pitch_rad < DRAWN_CAMERA.extrinsics.pitch_rad
 
 
+@pytest.mark.parametrize("jump_px, accepted", [(8.0, True), (12.5, False)])
+def test_a_vanishing_point_far_from_the_last_horizon_gives_way_to_tracking(
+    jump_px: float, accepted: bool
+) -> None:
+    calibrated = (320.0, DRAWN_CAMERA.horizon_row_px(320.0))  # the calibrated point
+    first = detect_pitch(_wedges(_blank(), calibrated), DRAWN_CAMERA, DEFAULTS)
+    assert first.method == "vanishing_point"
+    moved = (calibrated[0], calibrated[1] + jump_px)  # inside the region (14 px) either way
+    second = detect_pitch(_wedges(_blank(), moved), DRAWN_CAMERA, DEFAULTS, previous=first.memory)
+    assert second.vanishing_point_px is not None
+    np.testing.assert_allclose(second.vanishing_point_px, moved, atol=0.5)
+    # 11 rows (max_vp_jump_px) from the last horizon at most
+    assert (second.method == "vanishing_point") is accepted
+    if not accepted:
+        assert second.method == "horizon_tracking"
+        assert abs(second.horizon_row_px - first.horizon_row_px) <= (
+            DEFAULTS.max_tracking_offset_px
+        )
+    # the papers' detector has no such check
+    papers = dataclasses.replace(DEFAULTS, max_vp_jump_px=0.0)
+    again = detect_pitch(_wedges(_blank(), moved), DRAWN_CAMERA, papers, previous=first.memory)
+    assert again.method == "vanishing_point"
+
+
 def test_calibrated_vanishing_point_is_where_forward_projects() -> None:
     # Forward (1, 0, 0) seen by a camera pitched down p and turned left psi: in the optical
     # frame (sin psi, -sin p cos psi, cos p cos psi), so u = cx + fx tan psi / cos p and
