@@ -1,7 +1,8 @@
 """The evaluation's figures as plain-text tables in the papers' layout, markdown, CSV or JSON.
 
 `as_json` holds every figure: {"recordings": [{"name": ..., <figures>}], "total": {<figures>}}
-with <figures> = {"frames", "vehicles": {"frames": {rd, fn, rfn, fp, nvo, framed, and where
+with <figures> = {"frames", "vehicles": {"frames": {rd, fn, rfn, fp, nvo, framed, the
+shares, supplied_refined_share_by_class (RD / (RD + FN) per car, van, truck), and where
 each FN, RFN, FP, NVO happened as [frame, id] pairs}, "events": {events, radar_miss,
 not_refined, refined, refined_share, refined_share_of_radar_supplied}}, "guardrails",
 "pedestrians" (per filter: symmetry, motion_stereo, vehicles, radar), "motion_stereo", "pitch",
@@ -34,7 +35,7 @@ from .evaluate import (
 )
 from .mot import MotScore
 from .objects import BoxScore, MaskScore, PitchScore, RailScore
-from .vehicles import EventStats, FrameStats
+from .vehicles import VEHICLE_CLASSES, EventStats, FrameStats
 
 TIMING_TITLE = "Guard rails: execution time per frame, ms, one thread (paper 002, table I)"
 BASELINE_TIMING_TITLE = "Baselines: ms per frame (median, one thread, the same frames)"
@@ -77,6 +78,11 @@ def _distance_errors(s: FrameStats) -> str:
     return f"{s.distance_error_median_m:+.2f} / {s.distance_error_p90_m:.2f}"
 
 
+def _by_class(s: FrameStats) -> str:
+    """RD / (RD + FN) of each vehicle class, in VEHICLE_CLASSES' order ("-": none framed)."""
+    return " / ".join(_fixed(s.supplied_refined_share(c)) for c in VEHICLE_CLASSES)
+
+
 def _pairs(at: Sequence[tuple[int, int]]) -> list[list[int]]:
     return [[frame, what] for frame, what in at]
 
@@ -96,6 +102,9 @@ def _frames_json(s: FrameStats, listings: bool) -> dict[str, Any]:
         "rd_iou_good_share": _share(s.rd_iou_share(IOU_GOOD)),
         "distance_error_median_m": _share(s.distance_error_median_m),
         "distance_error_p90_m": _share(s.distance_error_p90_m),
+        "supplied_refined_share_by_class": {
+            c: _share(s.supplied_refined_share(c)) for c in VEHICLE_CLASSES
+        },
     }
     if listings:
         out |= {
@@ -353,6 +362,7 @@ def tables(
                 "RD box IoU median",
                 f"RD box IoU >= {IOU_GOOD:g}",
                 "distance error m: median / p90 of size",
+                "RD / (RD + FN): " + " / ".join(VEHICLE_CLASSES),
             ),
             tuple(
                 (
@@ -367,6 +377,7 @@ def tables(
                     _fixed(r.vehicles.rd_iou_median),
                     _percent(r.vehicles.rd_iou_share(IOU_GOOD)),
                     _distance_errors(r.vehicles),
+                    _by_class(r.vehicles),
                 )
                 for r in rows
             ),

@@ -53,6 +53,9 @@ Notes:
       true vehicle's box by IoU >= 0.5. nuScenes and aiMotive: the same FP. The papers'
       preset on the bundled stop_and_go: FP 24 -> 22.
 
+Beyond the paper, RD / (RD + FN) per class (`FrameStats.supplied_refined_share`): of the
+framed cars, vans and trucks that an area contains, the share refined.
+
 Beyond the paper, the distance error: for each framed vehicle that an estimate finds across
 (lateral position and width within `refined_error_m`) less than DISTANCE_MATCH_M off in
 distance, the estimate's distance minus the distance of the vehicle's near face, of the
@@ -119,13 +122,14 @@ class FrameVehicles:
     verdict) per supplied target on no vehicle; rd_iou: for each RD vehicle in order, the
     IoU of its true image box with the best box of the estimates that refine it (NaN when
     none has a box); distance_error_m: the distance errors of the framed vehicles found
-    across (module docstring)."""
+    across (module docstring); classes: each framed vehicle's class, in `vehicles`' order."""
 
     index: int
     vehicles: tuple[tuple[int, VehicleVerdict], ...]
     obstacles: tuple[tuple[int, ObstacleVerdict], ...]
     rd_iou: tuple[float, ...] = ()
     distance_error_m: tuple[float, ...] = ()
+    classes: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -147,6 +151,8 @@ class FrameStats:
     rd_iou: tuple[float, ...] = ()
     # `FrameVehicles.distance_error_m` of every frame: estimate minus near face, metres
     distance_error_m: tuple[float, ...] = ()
+    # (class, verdict) of every framed vehicle on every frame
+    class_verdicts: tuple[tuple[str, VehicleVerdict], ...] = ()
 
     @property
     def framed(self) -> int:
@@ -175,6 +181,13 @@ class FrameStats:
             return math.nan
         sizes = sorted(abs(e) for e in self.distance_error_m)
         return sizes[min(len(sizes) - 1, math.ceil(0.9 * len(sizes)) - 1)]
+
+    def supplied_refined_share(self, cls: str) -> float:
+        """RD / (RD + FN) of the framed vehicles of class `cls`: the share of those radar
+        supplied to vision that vision refined (NaN without one)."""
+        rd = sum(c == cls and v == "rd" for c, v in self.class_verdicts)
+        fn = sum(c == cls and v == "fn" for c, v in self.class_verdicts)
+        return rd / (rd + fn) if rd + fn else math.nan
 
     def __add__(self, other: FrameStats) -> FrameStats:
         return add_fields(self, other)
@@ -272,6 +285,7 @@ def score_frame(
     """One frame's verdicts (module docstring): truth objects, the frame's radar targets,
     the search areas built for them, and the estimates to score."""
     vehicles: list[tuple[int, VehicleVerdict]] = []
+    classes: list[str] = []
     rd_iou: list[float] = []
     distance_error_m: list[float] = []
     for o in objects:
@@ -288,6 +302,7 @@ def score_frame(
         else:
             verdict = "fn"
         vehicles.append((o.id, verdict))
+        classes.append(o.cls)
     all_vehicles = [o for o in objects if o.cls in VEHICLE_CLASSES]
 
     def on_a_vehicle(x_m: float, y_m: float) -> bool:
@@ -308,7 +323,12 @@ def score_frame(
         if not e.target_indices and not on_a_vehicle(e.distance_m, e.lateral_m):
             obstacles.append((-1 - k, "fp"))
     return FrameVehicles(
-        index, tuple(vehicles), tuple(obstacles), tuple(rd_iou), tuple(distance_error_m)
+        index,
+        tuple(vehicles),
+        tuple(obstacles),
+        tuple(rd_iou),
+        tuple(distance_error_m),
+        tuple(classes),
     )
 
 
@@ -332,6 +352,12 @@ def frame_stats(frames: Sequence[FrameVehicles]) -> FrameStats:
         nvo_at=tuple(at["nvo"]),
         rd_iou=tuple(v for f in frames for v in f.rd_iou),
         distance_error_m=tuple(e for f in frames for e in f.distance_error_m),
+        class_verdicts=tuple(  # frames built without classes (by hand) add none
+            (c, v)
+            for f in frames
+            if f.classes
+            for c, (_, v) in zip(f.classes, f.vehicles, strict=True)
+        ),
     )
 
 

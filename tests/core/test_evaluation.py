@@ -146,6 +146,29 @@ def test_the_distance_error_of_every_vehicle_found_across() -> None:
     assert math.isnan(frame_stats([]).distance_error_median_m)
 
 
+def test_rd_over_rd_and_fn_by_class() -> None:
+    """A car refined on 3 frames and not on 1, a van refined on 1 of 4, a truck never
+    supplied to vision (RFN): 0.75, 0.25 and none."""
+    frames = []
+    for i in range(4):
+        van = dataclasses.replace(car(2, 30.0, 4.0), cls="van")
+        truck = dataclasses.replace(car(3, 40.0, -4.0), cls="truck")
+        radar = [target(20.0, 0.0), target(30.0, 4.0)]  # none on the truck
+        estimates = [Estimate(20.0 if i < 3 else 22.0, 0.0, 1.8, (0,))]
+        if i == 0:
+            estimates.append(Estimate(30.0, 4.0, 1.8, (1,)))
+        areas = [area(k, t) for k, t in enumerate(radar)]
+        frames.append(
+            score_frame(i, [car(1, 20.0, 0.0), van, truck], radar, areas, estimates, TOLERANCE_M)
+        )
+    s = frame_stats(frames)
+    assert s.supplied_refined_share("car") == 0.75
+    assert s.supplied_refined_share("van") == 0.25
+    assert math.isnan(s.supplied_refined_share("truck")) and s.rfn == 4
+    assert report._by_class(s) == "0.75 / 0.25 / -"
+    assert (s + s).supplied_refined_share("van") == 0.25  # drives add up
+
+
 def test_refined_needs_distance_lateral_and_width_each_within_the_tolerance() -> None:
     objects, radar = [car(1, 20.0, 0.0, width_m=1.8)], [target(20.0, 0.0)]
     areas = [area(0, radar[0])]
@@ -424,6 +447,9 @@ def test_json_has_every_figure_with_its_type(stop_and_go_json: dict) -> None:  #
         )
         for k in ("refined_share", "refined_share_of_radar_supplied"):
             assert events[k] is None or 0.0 <= events[k] <= 1.0
+        by_class = frames["supplied_refined_share_by_class"]
+        assert set(by_class) == {"car", "van", "truck"}
+        assert all(v is None or 0.0 <= v <= 1.0 for v in by_class.values())
         assert set(figures) >= {
             "vehicles", "guardrails", "pedestrians", "motion_stereo", "pitch", "tracking"
         }  # fmt: skip
