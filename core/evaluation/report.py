@@ -79,7 +79,8 @@ def _distance_errors(s: FrameStats) -> str:
 
 
 def _by_class(s: FrameStats) -> str:
-    """RD / (RD + FN) of each vehicle class, in VEHICLE_CLASSES' order ("-": none framed)."""
+    """RD / (RD + FN) of each vehicle class, in VEHICLE_CLASSES' order ("-": no vehicle of
+    that class was RD or FN)."""
     return " / ".join(_fixed(s.supplied_refined_share(c)) for c in VEHICLE_CLASSES)
 
 

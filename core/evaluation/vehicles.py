@@ -53,8 +53,9 @@ Notes:
       true vehicle's box by IoU >= 0.5. nuScenes and aiMotive: the same FP. The papers'
       preset on the bundled stop_and_go: FP 24 -> 22.
 
-Beyond the paper, RD / (RD + FN) per class (`FrameStats.supplied_refined_share`): of the
-framed cars, vans and trucks that an area contains, the share refined.
+Beyond the paper, RD / (RD + FN) per class (`FrameStats.supplied_refined_share`): for the
+framed cars, vans and trucks apart, the share of those radar supplied to vision that
+vision refined (RFN left out).
 
 Beyond the paper, the distance error: for each framed vehicle that an estimate finds across
 (lateral position and width within `refined_error_m`) less than DISTANCE_MATCH_M off in
