@@ -19,8 +19,8 @@ Images: RGB (H, W, 3) uint8 indexed [row, col]; pixels (u, v) = (column, row) as
 Boxes: vehicle boxes are pixel-edge bounds (pixel centres at whole numbers, `core.vehicle`);
 search areas and pedestrian boxes end exclusive on pixel centres (`core.search_area`,
 `core.pedestrian`), i.e. their pixel edges are half a pixel lower. A box outline is drawn
-on the pixels holding its edges (`box_pixels`), `BOX_THICKNESS_PX` deep inwards, so it never
-covers a pixel outside the box.
+on the pixels holding its edges (`core.search_area.box_pixels`), `BOX_THICKNESS_PX` deep
+inwards, so it never covers a pixel outside the box.
 """
 
 from __future__ import annotations
