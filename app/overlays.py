@@ -255,7 +255,8 @@ def put_guard_rails(
     out: RgbImage, checks: Sequence[GuardRailCheck], areas: Sequence[SearchArea]
 ) -> None:
     """In place: the lines the guard-rail filter followed, in image pixels: `GUARD_RAIL_LINE_COLOUR`
-    (2 px) where they made a guard rail, `SHORT_LINE_COLOUR` (1 px) where too short; the
+    (2 px) where they made a guard rail, `SHORT_LINE_COLOUR` (1 px) where too short or the
+    label was taken back (verdict 'off_line', `core.rail_lines`); the
     areas labelled guard rail without a line of their own, by overlap management or along
     a rail line (`core.rail_lines`), hatched in `OVERLAP_COLOUR`.
 

@@ -65,6 +65,7 @@ EMPTY_PANEL_HW_PX = (300, 300)
 SYMMETRY_TILE_HW_PX = (208, 272)
 MATRIX_ROW_PX = 2  # picture rows per half-width of a symmetry matrix
 GUARD_RAIL_TILE_HW_PX = (112, 352)
+OFF_LINE_CAPTION = "off the rail line"  # a label `core.rail_lines` took back
 SHEET_COLUMNS = 3
 PLOT_HEIGHT_PX = 160
 BAND_ROW_PX = 6
@@ -369,16 +370,19 @@ def guard_rail_tile(
     on the right (edges grey) with the followed line (magenta when a rail, dark magenta when
     too short), its start (green) and holes (red); an area labelled by overlap shows its
     patch hatched. Captioned with the target, its distance, side, coverage and verdict
-    ("along the rail line" for one labelled by `core.rail_lines` after its search).
+    ("along the rail line" for one labelled by `core.rail_lines` after its search, "off the
+    rail line" for one whose label `core.rail_lines` took back).
 
     Shape: (tile_h + STRIP_HEIGHT_PX, tile_w, 3).
     """
     patch = grey_to_rgb(area.patch)
-    if check.verdict == "overlap":
+    if check.overlapped_by is not None:
         caption = (
             f"#{check.target_index} {area.x_m:.1f} m {check.side}: overlap of "
             f"#{check.overlapped_by}"
         )
+        if not check.guard_rail:
+            return _captioned_tile(patch, f"{caption}, {OFF_LINE_CAPTION}", tile_hw_px)
         return _captioned_tile(_hatched(patch, OVERLAP_COLOUR), caption, tile_hw_px)
     edges = check.edges
     h, w = edges.shape
@@ -394,7 +398,9 @@ def guard_rail_tile(
     _paint_cells(right, check.holes_px, s, HOLE_COLOUR)
     if check.start_px is not None:
         _paint_cells(right, check.line_px[:1], s, START_COLOUR)
-    verdict = "along the rail line" if check.verdict == "line" else check.verdict
+    verdict = {"line": "along the rail line", "off_line": OFF_LINE_CAPTION}.get(
+        check.verdict, check.verdict
+    )
     caption = f"#{check.target_index} {area.x_m:.1f} m {check.side} {check.coverage:.0%} {verdict}"
     return _captioned_tile(out, caption, tile_hw_px)
 

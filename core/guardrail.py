@@ -40,7 +40,8 @@ Steps, each visible in `GuardRailCheck`:
    `manage_overlaps` False searches every slow area.
 
 Beyond the paper, `core.rail_lines` then labels the searched targets that lie along the
-line of the rail returns found over the last seconds (verdict 'line').
+line of the rail returns found over the last seconds (verdict 'line'), and takes the label
+back from those labelled here that lie well across from that line (verdict 'off_line').
 
 A right rail is the mirror image of a left one: steps 1-5 give the left-rail results of the
 patch flipped left-right, flipped back (step 1 keeps the mirrored orientation, steps 3-5
@@ -177,7 +178,9 @@ from core.params import GuardRailParams
 from core.search_area import SearchArea, overlap_fraction
 
 SIDES = ("left", "right")
-VERDICTS = ("guard_rail", "not_guard_rail", "overlap", "line")
+VERDICTS = ("guard_rail", "not_guard_rail", "overlap", "line", "off_line")
+# the verdicts that label a target guard rail
+RAIL_VERDICTS = ("guard_rail", "overlap", "line")
 
 # Fig. 2, as read in the module Notes: (a) erosion, (b) dilation.
 EROSION_KERNEL = np.ones((1, 3), dtype=np.uint8)
@@ -252,8 +255,10 @@ class GuardRailCheck:
     stepped over as holes; coverage: 0..1 (0 when not searched); line_height_m: how far
     above the road the line passes the target (step 5; NaN when not searched or no line);
     verdict: one of VERDICTS,
-    'overlap' when labelled guard rail by overlap without a search; overlapped_by:
-    target_index of the area whose guard rail labelled this one (None unless 'overlap').
+    'overlap' when labelled guard rail by overlap without a search, 'line' and 'off_line'
+    (`core.rail_lines`) when labelled along a rail line after the search and when the label
+    was taken back for lying across from one; overlapped_by: target_index of the area whose
+    guard rail labelled this one by overlap (None when searched).
     """
 
     target_index: int
@@ -276,7 +281,7 @@ class GuardRailCheck:
     def guard_rail(self) -> bool:
         """Labelled guard rail, by a search, by overlap or along a rail line
         (`core.rail_lines`)."""
-        return self.verdict != "not_guard_rail"
+        return self.verdict in RAIL_VERDICTS
 
 
 @dataclass(frozen=True, eq=False)
@@ -293,7 +298,7 @@ class GuardRailResult:
     @property
     def searched(self) -> int:
         """Number of areas the line search ran on."""
-        return sum(c.verdict != "overlap" for c in self.checks)
+        return sum(c.overlapped_by is None for c in self.checks)
 
 
 def is_slow(target: RadarTarget, ego_speed_mps: float, params: GuardRailParams) -> bool:

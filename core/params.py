@@ -439,6 +439,11 @@ class GuardRailParams:
     # (core/rail_lines.py Notes; 0.4 before)
     line_memory_s: float = 2.0
     line_gate_m: float = 0.5
+    # beyond the paper (core/rail_lines.py, step 4): a target labelled guard rail by its
+    # search or by overlap that lies along a rail line but more than line_veto_m across
+    # from it is not a rail return (a pole, a sign, a car beside the rail); 0: off, the
+    # papers' preset
+    line_veto_m: float = 1.0
 
     def __post_init__(self) -> None:
         _positive(self, "max_speed_mps", "sobel_threshold", "line_gate_m")
@@ -449,6 +454,12 @@ class GuardRailParams:
             self.line_memory_s,
         )
         _check(self.max_holes >= 0, "max_holes", "an integer >= 0", self.max_holes)
+        _check(
+            math.isfinite(self.line_veto_m) and self.line_veto_m >= 0,
+            "line_veto_m",
+            "a distance >= 0 (0: off)",
+            self.line_veto_m,
+        )
         _check(
             math.isfinite(self.overlap_gate_m) and self.overlap_gate_m >= 0,
             "overlap_gate_m",

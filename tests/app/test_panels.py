@@ -305,6 +305,23 @@ def test_guard_rail_panel_has_one_tile_per_check_and_an_empty_state() -> None:
     np.testing.assert_array_equal(panels.guard_rail_panel([], areas), expected)
 
 
+def test_a_label_taken_back_is_drawn_as_not_a_rail() -> None:
+    tile_hw = (40, 100)
+    searched = panels.guard_rail_tile(rail_check(0, "off_line"), area((8, 16)), tile_hw)
+    left, top = 16 + (16 + SEP) * 2, 12
+    assert tuple(searched[top + 4 * 2, left + 1 * 2]) == overlays.SHORT_LINE_COLOUR
+    overlap = dataclasses.replace(
+        rail_check(2, "off_line", ()), edges=np.zeros((0, 0), np.uint8), overlapped_by=0
+    )
+    out = panels.guard_rail_tile(overlap, area((8, 16)), tile_hw)
+    assert out.shape == (tile_hw[0] + STRIP, tile_hw[1], 3)
+    assert not is_colour(out, overlays.OVERLAP_COLOUR).any()  # not hatched: no longer a rail
+    labelled = dataclasses.replace(overlap, verdict="overlap")
+    assert is_colour(
+        panels.guard_rail_tile(labelled, area((8, 16)), tile_hw), overlays.OVERLAP_COLOUR
+    ).any()
+
+
 # --- bird's-eye extent ----------------------------------------------------------------------
 
 

@@ -172,9 +172,43 @@ def test_a_target_along_the_line_is_labelled_and_others_are_not() -> None:
     assert again.checks[0].verdict == "line"
 
 
+def test_a_label_well_across_from_the_line_is_taken_back() -> None:
+    xs = [10.0, 16.0, 22.0, 28.0, 34.0, 40.0]
+    radar = [target_at(x, rail_y_m(x)) for x in xs]
+    radar += [
+        target_at(30.0, rail_y_m(30.0) - 1.5),  # 6: a pole 1.5 m behind the rail, searched
+        target_at(35.0, rail_y_m(35.0) + 1.3),  # 7: a parked car inside it, by overlap
+        target_at(25.0, rail_y_m(25.0) + 0.6),  # 8: a rail return scattered 0.6 m
+        target_at(80.0, rail_y_m(80.0) + 2.0),  # 9: beyond the line's stretch (40 + 20 m)
+        target_at(30.0, 7.0),  # 10: the left side has no line
+    ]
+    overlap = [dataclasses.replace(check(i, "overlap"), overlapped_by=0) for i in (7, 9)]
+    checks = [check(i, "guard_rail") for i in (0, 1, 2, 3, 4, 5, 6, 8)]
+    checks += [*overlap, dataclasses.replace(check(10, "overlap", "left"), overlapped_by=0)]
+    found = GuardRailResult(tuple(checks))
+    still = EgoMotion.still(0.1)
+    result, lines, kept = along_rail_lines(found, radar, RailReturns.none(), still, 0.1, PARAMS)
+    verdicts = {c.target_index: c.verdict for c in result.checks}
+    assert PARAMS.line_veto_m == 1.0 and lines[0].holds(30.0, rail_y_m(30.0), 0.2)
+    assert [verdicts[i] for i in (6, 7, 8, 9, 10)] == [
+        "off_line",
+        "off_line",
+        "guard_rail",
+        "overlap",
+        "overlap",
+    ]
+    assert result.guard_rail_targets == frozenset(range(11)) - {6, 7}
+    assert len(kept) == 8  # the pole's return stays remembered; the fit leaves it out
+    assert lines[0].returns == 7
+    off = dataclasses.replace(PARAMS, line_veto_m=0.0)
+    same, _, _ = along_rail_lines(found, radar, RailReturns.none(), still, 0.1, off)
+    assert same.guard_rail_targets == frozenset(range(11))
+
+
 def test_the_papers_preset_leaves_the_verdicts_as_they_are() -> None:
     papers = params_from("papers").guardrail
     assert papers.line_memory_s == 0.0 and PARAMS.line_memory_s == 2.0
+    assert papers.line_veto_m == 0.0
     found = GuardRailResult(tuple(check(i, "guard_rail") for i in range(6)))
     radar = [target_at(x, rail_y_m(x)) for x in (10.0, 16.0, 22.0, 28.0, 34.0, 40.0)]
     result, lines, kept = along_rail_lines(
@@ -184,7 +218,14 @@ def test_the_papers_preset_leaves_the_verdicts_as_they_are() -> None:
 
 
 @pytest.mark.parametrize(
-    ("field", "value"), [("line_memory_s", -1.0), ("line_memory_s", math.nan), ("line_gate_m", 0.0)]
+    ("field", "value"),
+    [
+        ("line_memory_s", -1.0),
+        ("line_memory_s", math.nan),
+        ("line_gate_m", 0.0),
+        ("line_veto_m", -0.5),
+        ("line_veto_m", math.inf),
+    ],
 )
 def test_bad_line_parameters_are_rejected_by_name(field: str, value: float) -> None:
     with pytest.raises(ParamsError, match=field):
