@@ -65,7 +65,7 @@ EMPTY_PANEL_HW_PX = (300, 300)
 SYMMETRY_TILE_HW_PX = (208, 272)
 MATRIX_ROW_PX = 2  # picture rows per half-width of a symmetry matrix
 GUARD_RAIL_TILE_HW_PX = (112, 352)
-OFF_LINE_CAPTION = "off the rail line"  # a label `core.rail_lines` took back
+OFF_LINE_CAPTION = "not on a rail line"  # a label `core.rail_lines` took back
 SHEET_COLUMNS = 3
 PLOT_HEIGHT_PX = 160
 BAND_ROW_PX = 6
@@ -368,10 +368,10 @@ def guard_rail_tile(
 ) -> RgbImage:
     """One checked slow target: its area's patch on the left, the edge image after morphology
     on the right (edges grey) with the followed line (magenta when a rail, dark magenta when
-    too short), its start (green) and holes (red); an area labelled by overlap shows its
-    patch hatched. Captioned with the target, its distance, side, coverage and verdict
-    ("along the rail line" for one labelled by `core.rail_lines` after its search, "off the
-    rail line" for one whose label `core.rail_lines` took back).
+    too short or taken back), its start (green) and holes (red); an area labelled by
+    overlap shows its patch hatched. Captioned with the target, its distance, side,
+    coverage and verdict ("along the rail line" for one labelled by `core.rail_lines` after
+    its search, "not on a rail line" for one whose label `core.rail_lines` took back).
 
     Shape: (tile_h + STRIP_HEIGHT_PX, tile_w, 3).
     """

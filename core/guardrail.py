@@ -41,7 +41,8 @@ Steps, each visible in `GuardRailCheck`:
 
 Beyond the paper, `core.rail_lines` then labels the searched targets that lie along the
 line of the rail returns found over the last seconds (verdict 'line'), and takes the label
-back from those labelled here that lie well across from that line (verdict 'off_line').
+back from those labelled here on a side without such a line or well across from it
+(verdict 'off_line').
 
 A right rail is the mirror image of a left one: steps 1-5 give the left-rail results of the
 patch flipped left-right, flipped back (step 1 keeps the mirrored orientation, steps 3-5
@@ -257,7 +258,7 @@ class GuardRailCheck:
     verdict: one of VERDICTS,
     'overlap' when labelled guard rail by overlap without a search, 'line' and 'off_line'
     (`core.rail_lines`) when labelled along a rail line after the search and when the label
-    was taken back for lying across from one; overlapped_by: target_index of the area whose
+    was taken back for lying off the rail lines; overlapped_by: target_index of the area whose
     guard rail labelled this one by overlap (None when searched).
     """
 

@@ -440,9 +440,11 @@ class GuardRailParams:
     line_memory_s: float = 2.0
     line_gate_m: float = 0.5
     # beyond the paper (core/rail_lines.py, step 4): a target labelled guard rail by its
-    # search or by overlap that lies along a rail line but more than line_veto_m across
-    # from it is not a rail return (a pole, a sign, a car beside the rail); 0: off, the
-    # papers' preset
+    # search or by overlap is not a rail return where its side's remembered returns are too
+    # few for a rail line (rail_returns_required) or where it lies along its side's line
+    # but more than line_veto_m across from it (a pole, a sign, a car beside the rail);
+    # False and 0: off, the papers' preset
+    rail_returns_required: bool = True
     line_veto_m: float = 1.0
 
     def __post_init__(self) -> None:

@@ -24,6 +24,8 @@ from core.rail_lines import (
 )
 
 PARAMS = GuardRailParams()
+# nothing remembered, after returns have been gathered long enough to judge a side by them
+GATHERED = dataclasses.replace(RailReturns.none(), gathered_s=PARAMS.line_memory_s)
 NO_PIXELS = np.zeros((0, 2), dtype=np.int32)
 
 
@@ -134,6 +136,13 @@ def test_remembered_returns_move_with_the_car_and_age_out() -> None:
     # the car's motion unknown: nothing remembered can be placed
     alone = remember(old, found, radar, None, 0.1, 2.0)
     assert len(alone) == 1 and alone.x_m[0] == pytest.approx(40.0)
+    # the time gathered grows frame by frame, with or without returns, until then
+    assert kept.gathered_s == pytest.approx(0.1) and alone.gathered_s == 0.0
+    nothing = GuardRailResult(())
+    later = remember(remember(kept, nothing, radar, ego, 0.1, 2.0), nothing, radar, ego, 0.1, 2.0)
+    assert later.gathered_s == pytest.approx(0.3)
+    empty = remember(RailReturns.none(), nothing, radar, ego, 0.1, 2.0)
+    assert len(empty) == 0 and empty.gathered_s == pytest.approx(0.1)
 
 
 def test_a_target_along_the_line_is_labelled_and_others_are_not() -> None:
@@ -180,35 +189,71 @@ def test_a_label_well_across_from_the_line_is_taken_back() -> None:
         target_at(35.0, rail_y_m(35.0) + 1.3),  # 7: a parked car inside it, by overlap
         target_at(25.0, rail_y_m(25.0) + 0.6),  # 8: a rail return scattered 0.6 m
         target_at(80.0, rail_y_m(80.0) + 2.0),  # 9: beyond the line's stretch (40 + 20 m)
-        target_at(30.0, 7.0),  # 10: the left side has no line
+        target_at(30.0, 7.0),  # 10: the left side has no other return
     ]
     overlap = [dataclasses.replace(check(i, "overlap"), overlapped_by=0) for i in (7, 9)]
     checks = [check(i, "guard_rail") for i in (0, 1, 2, 3, 4, 5, 6, 8)]
     checks += [*overlap, dataclasses.replace(check(10, "overlap", "left"), overlapped_by=0)]
     found = GuardRailResult(tuple(checks))
     still = EgoMotion.still(0.1)
-    result, lines, kept = along_rail_lines(found, radar, RailReturns.none(), still, 0.1, PARAMS)
+    result, lines, kept = along_rail_lines(found, radar, GATHERED, still, 0.1, PARAMS)
     verdicts = {c.target_index: c.verdict for c in result.checks}
-    assert PARAMS.line_veto_m == 1.0 and lines[0].holds(30.0, rail_y_m(30.0), 0.2)
+    assert PARAMS.line_veto_m == 1.0 and PARAMS.rail_returns_required
+    assert [line.side for line in lines] == ["right"]
+    assert lines[0].holds(30.0, rail_y_m(30.0), 0.2)
     assert [verdicts[i] for i in (6, 7, 8, 9, 10)] == [
         "off_line",
         "off_line",
         "guard_rail",
         "overlap",
-        "overlap",
+        "off_line",
     ]
-    assert result.guard_rail_targets == frozenset(range(11)) - {6, 7}
+    assert result.guard_rail_targets == frozenset(range(11)) - {6, 7, 10}
     assert len(kept) == 8  # the pole's return stays remembered; the fit leaves it out
     assert lines[0].returns == 7
-    off = dataclasses.replace(PARAMS, line_veto_m=0.0)
-    same, _, _ = along_rail_lines(found, radar, RailReturns.none(), still, 0.1, off)
-    assert same.guard_rail_targets == frozenset(range(11))
+    no_veto = dataclasses.replace(PARAMS, line_veto_m=0.0)
+    across, _, _ = along_rail_lines(found, radar, GATHERED, still, 0.1, no_veto)
+    assert across.guard_rail_targets == frozenset(range(11)) - {10}
+    any_side = dataclasses.replace(PARAMS, rail_returns_required=False)
+    side, _, _ = along_rail_lines(found, radar, GATHERED, still, 0.1, any_side)
+    assert side.guard_rail_targets == frozenset(range(11)) - {6, 7}
+
+
+def test_a_side_with_two_barriers_keeps_its_labels_without_a_line() -> None:
+    # the median's barrier 3 m left and another 11 m left: one line fits neither
+    xs = [10.0, 20.0, 30.0, 40.0]
+    radar = [target_at(x, 3.0) for x in xs] + [target_at(x, 11.0) for x in xs[:3]]
+    found = GuardRailResult(tuple(check(i, "guard_rail", "left") for i in range(7)))
+    still = EgoMotion.still(0.1)
+    result, lines, _ = along_rail_lines(found, radar, GATHERED, still, 0.1, PARAMS)
+    assert lines == () and result.guard_rail_targets == frozenset(range(7))
+
+
+def test_a_label_on_a_side_without_a_line_of_returns_is_taken_back() -> None:
+    # one pole found on the left, three returns on the right: too few for a line either side
+    radar = [target_at(20.0, 4.0), *(target_at(x, rail_y_m(x)) for x in (10.0, 16.0, 22.0))]
+    checks = [check(0, "guard_rail", "left"), *(check(i, "guard_rail") for i in (1, 2, 3))]
+    found = GuardRailResult(tuple(checks))
+    still = EgoMotion.still(0.1)
+    result, lines, kept = along_rail_lines(found, radar, GATHERED, still, 0.1, PARAMS)
+    assert lines == () and len(kept) == 4
+    assert result.guard_rail_targets == frozenset()
+    assert {c.verdict for c in result.checks} == {"off_line"}
+    # a fourth return on the right, found the next frame, makes the line there
+    radar.append(target_at(28.0, rail_y_m(28.0)))
+    found = GuardRailResult((*checks, check(4, "guard_rail")))
+    again, lines, _ = along_rail_lines(found, radar, kept, still, 0.1, PARAMS)
+    assert [line.side for line in lines] == ["right"]
+    assert again.guard_rail_targets == frozenset({1, 2, 3, 4})
+    # on a drive's first frame nothing can be judged yet: the labels stand
+    first, _, kept = along_rail_lines(found, radar, RailReturns.none(), still, 0.0, PARAMS)
+    assert first.guard_rail_targets == frozenset(range(5)) and kept.gathered_s == 0.0
 
 
 def test_the_papers_preset_leaves_the_verdicts_as_they_are() -> None:
     papers = params_from("papers").guardrail
     assert papers.line_memory_s == 0.0 and PARAMS.line_memory_s == 2.0
-    assert papers.line_veto_m == 0.0
+    assert papers.line_veto_m == 0.0 and not papers.rail_returns_required
     found = GuardRailResult(tuple(check(i, "guard_rail") for i in range(6)))
     radar = [target_at(x, rail_y_m(x)) for x in (10.0, 16.0, 22.0, 28.0, 34.0, 40.0)]
     result, lines, kept = along_rail_lines(
