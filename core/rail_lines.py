@@ -386,14 +386,3 @@ def _against_lines(
     ):
         return "off_line"
     return verdict
-    labelled = verdict in ("guard_rail", "overlap")
-    if verdict == "not_guard_rail" and line.holds(x_m, y_m, params.line_gate_m):
-        return "line"
-    if (
-        labelled
-        and params.line_veto_m > 0
-        and line.holds(x_m, y_m, math.inf)
-        and not line.holds(x_m, y_m, params.line_veto_m)
-    ):
-        return "off_line"
-    return verdict
