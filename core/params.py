@@ -440,8 +440,8 @@ class GuardRailParams:
     line_memory_s: float = 2.0
     line_gate_m: float = 0.5
     # beyond the paper (core/rail_lines.py, step 4): a target labelled guard rail by its
-    # search or by overlap is not a rail return where its side's remembered returns are too
-    # few for a rail line (rail_returns_required) or where it lies along its side's line
+    # search or by overlap is not a rail return where its side's remembered returns trace
+    # no line, even loosely (rail_returns_required), or where it lies along its side's line
     # but more than line_veto_m across from it (a pole, a sign, a car beside the rail);
     # False and 0: off, the papers' preset
     rail_returns_required: bool = True

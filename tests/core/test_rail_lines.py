@@ -220,13 +220,20 @@ def test_a_label_well_across_from_the_line_is_taken_back() -> None:
 
 
 def test_a_side_with_two_barriers_keeps_its_labels_without_a_line() -> None:
-    # the median's barrier 3 m left and another 11 m left: one line fits neither
-    xs = [10.0, 20.0, 30.0, 40.0]
-    radar = [target_at(x, 3.0) for x in xs] + [target_at(x, 11.0) for x in xs[:3]]
-    found = GuardRailResult(tuple(check(i, "guard_rail", "left") for i in range(7)))
+    # the median's barrier 3 m left, six returns, and another 11 m left, three: a third of
+    # the side's returns, too many for the line of step 2, few enough for step 4's
+    radar = [target_at(x, 3.0) for x in (10.0, 20.0, 30.0, 40.0, 50.0, 60.0)]
+    radar += [target_at(x, 11.0) for x in (15.0, 25.0, 35.0)]
+    found = GuardRailResult(tuple(check(i, "guard_rail", "left") for i in range(9)))
     still = EgoMotion.still(0.1)
     result, lines, _ = along_rail_lines(found, radar, GATHERED, still, 0.1, PARAMS)
-    assert lines == () and result.guard_rail_targets == frozenset(range(7))
+    assert lines == () and result.guard_rail_targets == frozenset(range(9))
+    # returns scattered over 6 m across trace no rail, however many
+    ys = [3.0, 9.0, 4.0, 9.0, 3.5, 8.0, 3.0, 9.5, 4.0]
+    scattered = [target_at(6.0 * (k + 1), y) for k, y in enumerate(ys)]
+    found = GuardRailResult(tuple(check(i, "guard_rail", "left") for i in range(9)))
+    result, _, _ = along_rail_lines(found, scattered, GATHERED, still, 0.1, PARAMS)
+    assert result.guard_rail_targets == frozenset()
 
 
 def test_a_label_on_a_side_without_a_line_of_returns_is_taken_back() -> None:
