@@ -194,6 +194,11 @@ class RailReturns:
     def __len__(self) -> int:
         return len(self.x_m)
 
+    def of_side(self, side: str) -> tuple[F64Array, F64Array]:
+        """(x_m, y_m) of the returns on the `side` rail ('left' or 'right')."""
+        mine = self.left == (side == "left")
+        return self.x_m[mine], self.y_m[mine]
+
 
 @dataclass(frozen=True)
 class RailLine:
@@ -320,8 +325,7 @@ def _robust_fit(
 
 def fit_line(returns: RailReturns, side: str) -> RailLine | None:
     """Step 2 on one side (None: no line there)."""
-    mine = returns.left == (side == "left")
-    x, y = returns.x_m[mine], returns.y_m[mine]
+    x, y = returns.of_side(side)
     coefficients, terms, rms, n, x_near, x_far = _robust_fit(
         x, y, math.floor(LINE_MAX_OUTLIER_FRACTION * len(x)), LINE_MAX_RMS_M
     )
@@ -355,7 +359,10 @@ def along_rail_lines(
     lines = tuple(line for side in SIDES if (line := fit_line(returns, side)) is not None)
     by_side = {line.side: line for line in lines}
     judged = params.rail_returns_required and returns.gathered_s >= params.line_memory_s
-    traced = {side: not judged or _traces_a_rail(returns, side) for side in SIDES}
+    # a side with step 2's line traces a rail: that fit is the loose one's, held tighter
+    traced = {
+        side: not judged or side in by_side or _traces_a_rail(returns, side) for side in SIDES
+    }
     checks = []
     for c in result.checks:
         t = radar[c.target_index]
@@ -368,8 +375,7 @@ def along_rail_lines(
 def _traces_a_rail(returns: RailReturns, side: str) -> bool:
     """Step 4: the side's returns lie along a line, loosely (LOOSE_LINE_RMS_M with up to
     LOOSE_LINE_OUTLIER_FRACTION of them left out)."""
-    mine = returns.left == (side == "left")
-    x, y = returns.x_m[mine], returns.y_m[mine]
+    x, y = returns.of_side(side)
     outliers = math.floor(LOOSE_LINE_OUTLIER_FRACTION * len(x))
     return _robust_fit(x, y, outliers, LOOSE_LINE_RMS_M)[1] > 0
 
