@@ -102,6 +102,7 @@ from core.tracking import (
     Tracker,
     TrackerState,
     TrackResult,
+    clipped_to_image,
     coasting_boxes,
     confirmed_sources,
 )
@@ -350,22 +351,23 @@ def update_tracks(
     """The tracking stage: the tracker's update with this frame's measurements, then the
     boxes of confirmed tracks missed this frame moved to where they are expected
     (`coasting_boxes`) unless `tracking.coasting_boxes_follow` is off, then each vehicle
-    track's body around its box (`core.vehicle.body_box`, step 12)."""
+    track's body around its box (`core.vehicle.body_box`, step 12), every box cut to the
+    image (`clipped_to_image`)."""
     tracks = tracker.update(measurements, ego, dt_s)
     if params.tracking.coasting_boxes_follow:
         tracks = coasting_boxes(tracks, camera)
     length_m = params.vehicle.body_length_m
-    if length_m == 0:
-        return tracks  # the papers' boxes: no body (Track.outline_px is box_px)
-    return dataclasses.replace(
-        tracks,
-        tracks=tuple(
-            dataclasses.replace(t, body_px=body_box(t.box_px, t.x_m, camera, length_m))
-            if t.kind == "vehicle"
-            else t
-            for t in tracks.tracks
-        ),
-    )
+    if length_m > 0:  # the papers' boxes have no body (Track.outline_px is box_px)
+        tracks = dataclasses.replace(
+            tracks,
+            tracks=tuple(
+                dataclasses.replace(t, body_px=body_box(t.box_px, t.x_m, camera, length_m))
+                if t.kind == "vehicle"
+                else t
+                for t in tracks.tracks
+            ),
+        )
+    return clipped_to_image(tracks, camera)
 
 
 class FusionEngine:

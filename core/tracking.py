@@ -58,6 +58,10 @@ filter (a random walk).
    box where it expects its object now, from the predicted ground point and width, not where
    the box was last measured (a car drawing near while vision misses it for a frame or two).
 
+7. boxes cut to the image (`clipped_to_image`, the engine's step): a box is what the camera
+   shows of its object. A vehicle drawing near beside the car runs off the image, and its
+   coasting box with it, while its truth box (the visible part) ends at the border.
+
 `Tracker.state()` and `Tracker.restore(state)` keep and take up the tracks and the next id
 (a seek back to a frame whose state was kept).
 
@@ -92,6 +96,13 @@ Notes:
       stop_and_go 0.595 / 0.562 / 0.347 -> 0.598 / 0.578 / 0.349; held out, seeds 1717-2020:
       0.585 / 0.501 / 0.226 -> 0.591 / 0.533 / 0.270, track FP per frame 0.27 / 0.41 / 0.29 ->
       0.26 / 0.37 / 0.23; nuScenes scene-0523 0.179 -> 0.207. Raw detections are the same.
+    - Step 7: the truth boxes of the evaluation are the visible parts, which end at the
+      image border; oncoming and overtaking cars 3-10 m away in the next lane ran off the
+      image while their coasting boxes (and their bodies) kept the whole vehicle, IoU 0 with
+      the truth. Radar-seen MOTA, highway / exurban / stop_and_go, unclipped -> clipped, on
+      drives of new seeds (20 s each): seeds 1818, 2121, 2424, 2525 0.703 / 0.570 / 0.461 ->
+      0.703 / 0.596 / 0.461; seeds 1919, 2020, 2222, 2323 0.600 / 0.594 / 0.499 -> 0.603 /
+      0.618 / 0.499; the real drives and the detections the same.
     - `ego.dt_s` is not used: `dt_s` is the interval of the prediction (the engine passes the
       same interval to both).
 """
@@ -281,6 +292,33 @@ def coasting_boxes(result: TrackResult, camera: CameraModel) -> TrackResult:
         return result
     return TrackResult(
         tuple(replace(t, box_px=boxes[t.id]) if t.id in boxes else t for t in result.tracks),
+        result.ended,
+    )
+
+
+def _clipped(box: Box, width_px: int, height_px: int) -> Box:
+    u0, v0, u1, v1 = box
+    right, bottom = width_px - 0.5, height_px - 0.5  # the image's outer pixel edges
+    return (
+        min(max(u0, -0.5), right),
+        min(max(v0, -0.5), bottom),
+        min(max(u1, -0.5), right),
+        min(max(v1, -0.5), bottom),
+    )
+
+
+def clipped_to_image(result: TrackResult, camera: CameraModel) -> TrackResult:
+    """`result` with every box (`box_px`, `body_px`) cut to the image (step 7)."""
+    w, h = camera.intrinsics.width_px, camera.intrinsics.height_px
+    return TrackResult(
+        tuple(
+            replace(
+                t,
+                box_px=_clipped(t.box_px, w, h),
+                body_px=None if t.body_px is None else _clipped(t.body_px, w, h),
+            )
+            for t in result.tracks
+        ),
         result.ended,
     )
 

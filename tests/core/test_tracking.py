@@ -18,6 +18,7 @@ from core.tracking import (
     Track,
     Tracker,
     TrackResult,
+    clipped_to_image,
     coasting_boxes,
     confirmed_sources,
     expected_boxes,
@@ -641,6 +642,23 @@ def test_only_confirmed_coasting_boxes_in_front_of_the_camera_move() -> None:
         _track(3, -4.0, misses=1),  # behind the camera
     )
     assert coasting_boxes(TrackResult(kept, ()), FLAT_CAMERA).tracks == kept
+
+
+def test_boxes_running_off_the_image_are_cut_at_its_border() -> None:
+    w, h = FLAT_CAMERA.intrinsics.width_px, FLAT_CAMERA.intrinsics.height_px
+    inside = _track(1, 20.0, misses=0)
+    beside = dataclasses.replace(
+        _track(2, 6.0, misses=1),
+        box_px=(-80.0, 150.0, 60.0, h + 40.0),
+        body_px=(-80.0, 150.0, 90.0, h + 40.0),
+    )
+    gone = dataclasses.replace(_track(3, 6.0, misses=1), box_px=(w + 10.0, 100.0, w + 50.0, 200.0))
+    result = clipped_to_image(TrackResult((inside, beside, gone), (4,)), FLAT_CAMERA)
+    assert result.tracks[0] == inside
+    assert result.tracks[1].box_px == (-0.5, 150.0, 60.0, h - 0.5)
+    assert result.tracks[1].body_px == (-0.5, 150.0, 90.0, h - 0.5)
+    assert result.tracks[2].box_px == (w - 0.5, 100.0, w - 0.5, 200.0)  # empty: nothing shows
+    assert result.ended == (4,)
 
 
 # --- detections searched for a track (core.track_search) ------------------------------------
