@@ -271,6 +271,12 @@ class VehicleParams:
     # holds its rear face and the same face this far behind, as the camera sees a vehicle
     # that long: its side and roof (0: the rear face alone, the papers' preset)
     body_length_m: float = 4.0
+    # beyond the papers (core/vehicle.py, step 11): a box at least truck_width_m wide (a truck
+    # or a bus: cars are 1.55-2.0 m wide, vans up to 2.1 m, trucks 2.45-2.6 m) rises to
+    # truck_height_ratio x its width where one of its side borders goes on up to there (0:
+    # off, the papers' preset)
+    truck_width_m: float = 2.3
+    truck_height_ratio: float = 1.4
     # boxes from several targets overlapping by more than this share of the smaller one are
     # one vehicle (paper 001: "overlapping results")
     merge_overlap_fraction: float = 0.5
@@ -303,6 +309,12 @@ class VehicleParams:
             self.body_length_m,
         )
         _check(
+            math.isfinite(self.truck_height_ratio) and self.truck_height_ratio >= 0,
+            "truck_height_ratio",
+            "a ratio >= 0 (0: off)",
+            self.truck_height_ratio,
+        )
+        _check(
             math.isfinite(self.min_image_px_per_m) and self.min_image_px_per_m >= 0,
             "min_image_px_per_m",
             "a resolution >= 0 (0: off)",
@@ -310,6 +322,7 @@ class VehicleParams:
         )
         _positive(
             self,
+            "truck_width_m",
             "max_base_height_m",
             "search_width_m",
             "moving_search_width_m",

@@ -27,7 +27,14 @@ from core.symmetry import (
     symmetry_matrix,
 )
 from core.synth.scene import Trajectory, Vehicle
-from core.vehicle import body_box, border_top, detect_vehicles, merge_boxes, world_size_ok
+from core.vehicle import (
+    body_box,
+    border_top,
+    detect_vehicles,
+    merge_boxes,
+    truck_top,
+    world_size_ok,
+)
 
 PARAMS = VehicleParams()
 RADAR_X_M = 3.6  # the synthetic radar's mount, ahead of the rear axle
@@ -440,7 +447,7 @@ def test_the_top_rises_to_where_the_vehicles_sides_end(
     assert fixed.box_px[3] == v.box_px[3] and fixed.box_px[1] >= v.box_px[1]
     if cls == "truck":
         assert fixed.box_px[3] - fixed.box_px[1] < 0.6 * (rows[-1] - rows[0])
-    off = dataclasses.replace(PARAMS, top_search_ratio=0.0)
+    off = dataclasses.replace(PARAMS, top_search_ratio=0.0, truck_height_ratio=0.0)
     (papers,) = detect_vehicles(areas, radar, cam, off, image=image).vehicles
     assert papers.box_px == fixed.box_px
 
@@ -457,6 +464,26 @@ def test_the_top_rises_past_a_base_without_sides() -> None:
     assert border_top(image, box, PARAMS) == pytest.approx(59.5, abs=1)  # Sobel: 3 rows
     off = dataclasses.replace(PARAMS, top_search_ratio=0.0)
     assert border_top(image, box, off) == box[1]
+
+
+def test_a_box_as_wide_as_a_truck_rises_to_a_trucks_height_along_one_border() -> None:
+    """Step 11: a white trailer's rear against a sky as bright (no right border above row
+    150), its left border against its own darker side up to row 40; the box found up to row
+    150 (100 px wide, base at row 200) rises to truck_height_ratio x its width, 140 px above
+    its base, as wide as a truck and not as a van; with neither border above, it stays."""
+    image = np.full((240, 320), 40, np.uint8)  # the road
+    image[:170] = 200  # the sky, as bright as the trailer
+    image[40:200, 60:100] = 120  # the trailer's side, seen beside its rear
+    image[150:200, 100:200] = 200  # the rear's lowest rows, the underride below them
+    image[185:200, 100:200] = 30
+    box = (99.5, 150.5, 199.5, 199.5)
+    top = 199.5 - PARAMS.truck_height_ratio * 100
+    assert truck_top(image, box, PARAMS.truck_width_m, PARAMS) == pytest.approx(top)
+    assert truck_top(image, box, PARAMS.truck_width_m - 0.05, PARAMS) == box[1]  # a van
+    image[40:200, 60:100] = 200  # no side: neither border goes on
+    assert truck_top(image, box, PARAMS.truck_width_m, PARAMS) == box[1]
+    off = dataclasses.replace(PARAMS, truck_height_ratio=0.0)
+    assert truck_top(image, box, 2.5, off) == box[1]
 
 
 def test_a_still_untracked_target_needs_more_symmetry(
