@@ -583,7 +583,9 @@ def _border_edges(
     dx = np.abs(np.asarray(cv2.Sobel(crop, cv2.CV_16S, 1, 0, ksize=3)))
     strong = dx[(row0 > 0) : (row0 > 0) + row1 - row0] > params.edge_threshold
     k = BORDER_TOLERANCE_PX
-    return strong[:, 1 : 2 * k + 2].any(axis=1), strong[:, -2 * k - 2 : -1].any(axis=1)
+    on_left = np.asarray(strong[:, 1 : 2 * k + 2].any(axis=1), dtype=np.bool_)
+    on_right = np.asarray(strong[:, -2 * k - 2 : -1].any(axis=1), dtype=np.bool_)
+    return on_left, on_right
 
 
 def border_top(image: U8Array, box: Box, params: VehicleParams) -> float:

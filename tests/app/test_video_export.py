@@ -126,9 +126,11 @@ def test_vehicle_boxes_are_drawn_where_the_engines_result_puts_them(
 ) -> None:
     frames, _ = _decode(mp4.path)
     result = engine_result("highway", FRAME)  # what the inspector shows
-    assert result.vehicle.vehicles, "frame 90 of the highway has vehicles"
-    for vehicle in result.vehicle.vehicles:
-        box = box_pixels(vehicle.box_px)
+    # the demo draws the confirmed vehicle tracks measured on the frame, with their bodies
+    shown = overlays.measured_confirmed(result.tracked_vehicles)
+    assert shown, "frame 90 of the highway has confirmed vehicles"
+    for track in shown:
+        box = box_pixels(track.outline_px)
         on = np.median(_outline(frames[0], box), axis=0)
         assert np.abs(on - overlays.VEHICLE_COLOUR).max() <= CHANNEL_TOLERANCE, (box, on)
         c0, r0, c1, r1 = box
