@@ -616,17 +616,17 @@ def border_top(image: U8Array, box: Box, params: VehicleParams) -> float:
 
 
 def _top(image: U8Array, box: Box, width_m: float, params: VehicleParams) -> float:
-    """Step 11: the top where the box's borders end (`border_top`), else, for a box as
-    wide as a truck, a truck's (`truck_top`)."""
+    """Step 11: the top where the box's borders end (`border_top`), raised further to a
+    truck's height for a box as wide as a truck (`truck_top`)."""
     top = border_top(image, box, params)
     return truck_top(image, (box[0], top, box[2], box[3]), width_m, params)
 
 
 def truck_top(image: U8Array, box: Box, width_m: float, params: VehicleParams) -> float:
-    """Step 11 for a box as wide as a truck (`truck_width_m`) whose borders end at its top:
-    its top row edge rises to `truck_height_ratio` x its width above its base when, on at
-    least TRUCK_BORDER_SHARE of the rows in between, one of its side borders has a vertical
-    edge; else it stays `v0`."""
+    """Step 11 for a box as wide as a truck (`truck_width_m`): its top row edge rises to
+    `truck_height_ratio` x its width above its base when, on at least TRUCK_BORDER_SHARE of
+    the rows between there and its top `v0`, one of its side borders has a vertical edge;
+    else (and when it is already as tall, or that row lies above the image) it stays `v0`."""
     u0, v0, u1, v1 = box
     if params.truck_height_ratio == 0 or width_m < params.truck_width_m:
         return v0
