@@ -308,19 +308,16 @@ def _clipped(box: Box, width_px: int, height_px: int) -> Box:
 
 
 def clipped_to_image(result: TrackResult, camera: CameraModel) -> TrackResult:
-    """`result` with every box (`box_px`, `body_px`) cut to the image (step 7)."""
+    """`result` with every box (`box_px`, `body_px`) cut to the image (step 7); the tracks
+    whose boxes lie inside it are the same objects."""
     w, h = camera.intrinsics.width_px, camera.intrinsics.height_px
-    return TrackResult(
-        tuple(
-            replace(
-                t,
-                box_px=_clipped(t.box_px, w, h),
-                body_px=None if t.body_px is None else _clipped(t.body_px, w, h),
-            )
-            for t in result.tracks
-        ),
-        result.ended,
-    )
+    tracks = []
+    for t in result.tracks:
+        box = _clipped(t.box_px, w, h)
+        body = None if t.body_px is None else _clipped(t.body_px, w, h)
+        inside = box == t.box_px and body == t.body_px
+        tracks.append(t if inside else replace(t, box_px=box, body_px=body))
+    return TrackResult(tuple(tracks), result.ended)
 
 
 def solve_assignment(cost: FloatArray) -> tuple[tuple[int, int], ...]:
