@@ -652,12 +652,19 @@ def test_boxes_running_off_the_image_are_cut_at_its_border() -> None:
         box_px=(-80.0, 150.0, 60.0, h + 40.0),
         body_px=(-80.0, 150.0, 90.0, h + 40.0),
     )
-    gone = dataclasses.replace(_track(3, 6.0, misses=1), box_px=(w + 10.0, 100.0, w + 50.0, 200.0))
-    result = clipped_to_image(TrackResult((inside, beside, gone), (4,)), FLAT_CAMERA)
+    out = (w + 10.0, 100.0, w + 50.0, 200.0)
+    gone = dataclasses.replace(_track(3, 6.0, misses=1), box_px=out)
+    person_gone = dataclasses.replace(_track(5, 6.0, misses=1, kind="pedestrian"), box_px=out)
+    # a guard-rail track's box is its search area: it stays, cut to an empty box
+    rail = dataclasses.replace(_track(6, 6.0, misses=1, kind="guard_rail"), box_px=out)
+    result = clipped_to_image(
+        TrackResult((inside, beside, gone, person_gone, rail), (4,)), FLAT_CAMERA
+    )
+    assert [t.id for t in result.tracks] == [1, 2, 6]  # the camera sees nothing of 3 and 5
     assert result.tracks[0] == inside
     assert result.tracks[1].box_px == (-0.5, 150.0, 60.0, h - 0.5)
     assert result.tracks[1].body_px == (-0.5, 150.0, 90.0, h - 0.5)
-    assert result.tracks[2].box_px == (w - 0.5, 100.0, w - 0.5, 200.0)  # empty: nothing shows
+    assert result.tracks[2].box_px == (w - 0.5, 100.0, w - 0.5, 200.0)
     assert result.ended == (4,)
 
 
