@@ -327,12 +327,10 @@ def clipped_to_image(result: TrackResult, camera: CameraModel) -> TrackResult:
     for t in result.tracks:
         box = _clipped(t.box_px, w, h)
         body = None if t.body_px is None else _clipped(t.body_px, w, h)
-        if box == t.box_px and body == t.body_px:
-            tracks.append(t)
-            continue
-        u0, v0, u1, v1 = box if body is None else body
-        if t.kind == "guard_rail" or (u1 > u0 and v1 > v0):
-            tracks.append(replace(t, box_px=box, body_px=body))
+        cut = t if box == t.box_px and body == t.body_px else replace(t, box_px=box, body_px=body)
+        u0, v0, u1, v1 = cut.outline_px
+        if cut is t or t.kind == "guard_rail" or (u1 > u0 and v1 > v0):
+            tracks.append(cut)
     return TrackResult(tuple(tracks), result.ended)
 
 
