@@ -235,7 +235,8 @@ def replay_window(params: Params) -> int:
     forget = frames_to_forget(params.motion_stereo)
     t = params.tracking
     # the longest confirmation: a miss kept between every two hits
-    confirming = t.confirm_frames + (t.confirm_frames - 1) * t.tentative_max_missed_frames
+    longest = max(t.confirm_frames, t.pedestrian_confirm_frames)
+    confirming = longest + (longest - 1) * t.tentative_max_missed_frames
     tracking = confirming + t.max_missed_frames
     return max(LONGEST_REPLAY_FRAMES if forget is None else forget, tracking)
 

@@ -639,6 +639,9 @@ class TrackingParams:
 
     # a track is confirmed after this many frames with a detection (chosen)
     confirm_frames: int = 3
+    # a pedestrian track after this many (chosen: the HOG-verified detections are rarely
+    # false; the papers' preset 3, as every kind; core/tracking.py, step 5)
+    pedestrian_confirm_frames: int = 2
     # a confirmed track is kept through this many consecutive missed frames (chosen)
     max_missed_frames: int = 3
     # a tentative track is kept through this many consecutive missed frames (chosen; the
@@ -700,6 +703,12 @@ class TrackingParams:
 
     def __post_init__(self) -> None:
         _check(self.confirm_frames >= 1, "confirm_frames", "an integer >= 1", self.confirm_frames)
+        _check(
+            self.pedestrian_confirm_frames >= 1,
+            "pedestrian_confirm_frames",
+            "an integer >= 1",
+            self.pedestrian_confirm_frames,
+        )
         _check(
             self.max_missed_frames >= 0,
             "max_missed_frames",

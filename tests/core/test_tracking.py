@@ -240,6 +240,27 @@ def test_confirmation_after_confirm_frames_hits() -> None:
     assert once.update([_m(20.0, 1.0)], STILL, DT_S).tracks[0].confirmed
 
 
+def test_a_pedestrian_is_confirmed_after_its_own_number_of_hits() -> None:
+    # the same object seen as a vehicle, a person and a rail return on every frame: each kind
+    # confirms after its own count (a pedestrian after 2, the others after 3)
+    assert (P.pedestrian_confirm_frames, P.confirm_frames) == (2, 3)
+    tracker = Tracker(P)
+    kinds: tuple[Kind, ...] = ("vehicle", "pedestrian", "guard_rail")
+    seen = []
+    for _ in range(3):
+        frame = [_m(20.0, 4.0 * k, 0, kind, 0.6) for k, kind in enumerate(kinds)]
+        result = tracker.update(frame, STILL, DT_S)
+        seen.append({t.kind: t.confirmed for t in result.tracks})
+    assert [s["pedestrian"] for s in seen] == [False, True, True]
+    assert [s["vehicle"] for s in seen] == [s["guard_rail"] for s in seen] == [False, False, True]
+    papers = Tracker(dataclasses.replace(P, pedestrian_confirm_frames=3))
+    flags = [
+        papers.update([_m(20.0, 0.0, 0, "pedestrian", 0.6)], STILL, DT_S).tracks[0].confirmed
+        for _ in range(3)
+    ]
+    assert flags == [False, False, True]
+
+
 def test_a_one_frame_false_positive_is_never_confirmed_and_is_ended() -> None:
     tracker = Tracker(P)
     for k in range(8):
@@ -392,10 +413,12 @@ def test_a_pedestrian_track_faster_than_a_person_is_not_confirmed_a_vehicle_trac
         assert _follow(off, "pedestrian", ego_speed_mps, speed_mps)[-1].tracks[0].confirmed
 
 
-def test_at_highway_speed_a_vehicle_part_is_shown_one_frame_at_most() -> None:
-    # confirmed on its third hit, the speed estimate is sure by the fourth
+def test_at_highway_speed_a_vehicle_part_is_shown_two_frames_at_most() -> None:
+    # confirmed on its second hit, the speed estimate is sure by the fourth
     results = _follow(P, "pedestrian", 25.0, 25.0)
-    assert sum(r.tracks[0].confirmed for r in results) <= 1
+    assert sum(r.tracks[0].confirmed for r in results) <= 2
+    papers = _follow(dataclasses.replace(P, pedestrian_confirm_frames=3), "pedestrian", 25.0, 25.0)
+    assert sum(r.tracks[0].confirmed for r in papers) <= 1
 
 
 def test_the_speed_gate_waits_for_the_speed_to_be_sure() -> None:
