@@ -41,14 +41,16 @@ log = logging.getLogger(__name__)
 
 # States kept per engine, so that a scrub back over frames it processed costs one frame, not
 # a replay: about 25 s of a 10 Hz drive around the playhead. Measured with tracemalloc over
-# recordings/highway (all 150 states kept): 86 KB a state, of which the 360 x 200 background
-# is 72 KB, the pitch histogram 2 KB, the copied tracks (8 on average, 15 at most) and the
-# rest 12 KB. 256 states come to about 22 MB per engine (a client comparing A and B has two).
+# recordings/highway (all 150 states kept; 2026-12-02): 140 KB a state, of which the 360 x 200
+# background is 72 KB, the previous frame at a quarter of its resolution 19 KB
+# (core.image_motion), the pitch histogram 2 KB, the copied tracks, the appearance templates
+# and the rest 47 KB (121 KB before the previous frame was kept). 256 states come to about
+# 36 MB per engine (a client comparing A and B has two).
 KEPT_STATES = 256
 # A seek plays on from the latest from-start state when it is at most this many frames back:
 # about 0.2 s at 4 ms a frame, where a replay of the window (22 frames) takes about 0.1 s.
 CATCH_UP_FRAMES = 50
-# Milestones per parameter set at most (their spacing grows for longer drives): 86 MB each.
+# Milestones per parameter set at most (their spacing grows for longer drives): 140 MB each.
 MOST_MILESTONES = 1000
 # Parameter sets whose milestones are kept, the last asked for; the filler fills the latest
 # first.

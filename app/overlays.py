@@ -100,6 +100,7 @@ PEDESTRIAN_REASONS: Mapping[str, str] = {
     "motion_stereo": "motion",
     "vehicle": "vehicle",
     "radar": "radar",
+    "image_motion": "moving",
     "hog": "HOG",
 }
 

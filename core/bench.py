@@ -269,7 +269,9 @@ def _guardrail_runs(camera: CameraModel, pairs: Sequence[Pair], params: Params) 
 
 def _pedestrian_runs(camera: CameraModel, pairs: Sequence[Pair], params: Params) -> list[Run]:
     """Pedestrian detection on each frame with its motion-stereo mask (background from the
-    frame before) and the vehicles found on the frame's radar targets."""
+    frame before), the vehicles found on the frame's radar targets, and the frame before as
+    the image-motion filter reads it."""
+    from core.image_motion import keep
     from core.motion_stereo import MotionStereo
     from core.pedestrian import detect_pedestrians
     from core.search_area import search_areas
@@ -283,13 +285,14 @@ def _pedestrian_runs(camera: CameraModel, pairs: Sequence[Pair], params: Params)
         areas = search_areas(now.image, camera, now.radar, params.vehicle)
         vehicles = detect_vehicles(areas, now.radar, camera, params.vehicle).vehicles
         boxes = [v.box_px for v in vehicles]
+        kept = keep(before.image)
 
         def run(
             image=now.image, mask=motion.image_mask, row=motion.image_mask_first_row_px,
-            boxes=boxes, radar=now.radar, speed=now.speed_mps,
+            boxes=boxes, radar=now.radar, speed=now.speed_mps, previous=kept, ego=now.ego,
         ) -> Callable[[], object]:  # fmt: skip
             return lambda: detect_pedestrians(
-                image, camera, mask, row, boxes, radar, speed, params.pedestrian
+                image, camera, mask, row, boxes, radar, speed, params.pedestrian, previous, ego
             )
 
         runs.append(run)

@@ -60,8 +60,9 @@ Replay tolerance (what a seek reproduces of playing the drive from its start):
       the window is confirmed again within `confirm_frames` of its start; a track older
       than the window carries less history and a less settled velocity; the search areas
       that tracks widen (`core.search_area`) follow the replayed tracks;
-    - pitch's horizon tracking and the vehicle boxes it leaves out depend on one frame
-      back, and are rebuilt by the first replayed frame.
+    - pitch's horizon tracking and the vehicle boxes it leaves out, and the pedestrians'
+      image-motion filter (`core.image_motion`), depend on one frame back, and are rebuilt
+      by the first replayed frame.
     `tests/core/test_engine.py` checks these on a bundled drive.
 """
 
@@ -76,10 +77,14 @@ from dataclasses import dataclass, replace
 from types import MappingProxyType
 from typing import Protocol, TypeVar
 
+import numpy as np
+import numpy.typing as npt
+
 from core.appearance import AppearanceMatch, Template, find_by_appearance, remember
 from core.camera import CameraModel
 from core.ego import NS_PER_S, EgoMotion
 from core.guardrail import GuardRailResult, detect_guard_rails
+from core.image_motion import keep as keep_for_image_motion
 from core.io.errors import RecordingError
 from core.io.frame import FrameInput
 from core.motion_stereo import (
@@ -108,13 +113,14 @@ from core.tracking import (
 )
 from core.vehicle import VehicleResult, body_box, detect_vehicles
 
+U8Array = npt.NDArray[np.uint8]
 MS_PER_S = 1000.0
 # A background whose weights never forget (frames_to_forget None) is rebuilt from this many
 # frames on a seek.
 LONGEST_REPLAY_FRAMES = 200
 # Frames between two milestones: a seek from the nearest costs at most this many frames, less
-# than a replay's window (22 frames under the defaults). 86 KB a state (app.engines), so 9 MB
-# for a 20-minute drive at 10 Hz.
+# than a replay's window (22 frames under the defaults). About 140 KB a state (app.engines), so
+# 168 MB for a 20-minute drive at 10 Hz, were there no cap (app.engines.MOST_MILESTONES).
 MILESTONE_EVERY_FRAMES = 10
 
 T = TypeVar("T")
@@ -227,6 +233,8 @@ class EngineState:
     rail_returns: RailReturns
     templates: Mapping[int, Template]  # core.appearance, by track id
     last: _LastFrame
+    # the frame as core.image_motion reads it on the next (a quarter of the resolution)
+    previous_image: U8Array | None = None
 
 
 def replay_window(params: Params) -> int:
@@ -411,6 +419,7 @@ class FusionEngine:
         self._rail_returns = RailReturns.none()
         self._templates: Mapping[int, Template] = MappingProxyType({})
         self._last: _LastFrame | None = None
+        self._previous_image: U8Array | None = None
         # after a start over: is the next frame's result from the start (a frame that cannot
         # be read within a from-start run breaks the drive as it breaks a playback)
         self._next_from_start = False
@@ -443,6 +452,7 @@ class FusionEngine:
         self._rail_returns = RailReturns.none()
         self._templates = MappingProxyType({})
         self._last = None
+        self._previous_image = None
         self._next_from_start = from_start
 
     def _state(self, last: _LastFrame) -> EngineState:
@@ -455,6 +465,7 @@ class FusionEngine:
             self._rail_returns,
             self._templates,
             last,
+            self._previous_image,
         )
 
     def _keep(self, state: EngineState) -> None:
@@ -484,6 +495,7 @@ class FusionEngine:
         self._rail_returns = state.rail_returns
         self._templates = state.templates
         self._last = state.last
+        self._previous_image = state.previous_image
 
     def _nearest_kept(self, index: int, window: int) -> int | None:
         """The latest frame j with index - window < j < index whose state is kept."""
@@ -676,6 +688,8 @@ class FusionEngine:
                 frame.radar,
                 frame.speed_mps,
                 p.pedestrian,
+                self._previous_image,
+                ego,
             )
         )
         measurements = tracker_measurements(
@@ -702,6 +716,7 @@ class FusionEngine:
         pitch.memory.row_histogram.flags.writeable = False
         self._pitch_memory = pitch.memory
         self._vehicle_boxes = boxes
+        self._previous_image = keep_for_image_motion(image)
         self._last = _LastFrame(frame.index, frame.t_ns, from_start)
         return FrameResult(
             index=frame.index,

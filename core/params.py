@@ -555,6 +555,12 @@ class PedestrianParams:
     radar_min_speed_mps: float = 3.0
     radar_gate_lateral_m: float = 1.5
     radar_gate_distance_fraction: float = 0.2
+    # beyond the papers (core/pedestrian.py, step 5; core/image_motion.py): a box whose pixels
+    # match the previous frame where they were, in the image, better by more than this
+    # normalised cross-correlation than where a still object would have been under the car's
+    # motion moves with the car (a truck's wheel beside it, outside the radar's view) and is
+    # removed; 2 or more switches the filter off (an NCC lies in -1 .. 1; the papers' preset)
+    image_motion_margin: float = 0.2
     # beyond the papers (core/pedestrian.py, step 6): a box that passed every filter is kept
     # only when OpenCV's HOG people SVM scores its window at least hog_min_score (the SVM's
     # own threshold is 0; core/hog.py); a box motion stereo did not mark, but that passed
@@ -625,6 +631,12 @@ class PedestrianParams:
             "radar_gate_lateral_m",
             "a distance >= 0 (0: no radar filter)",
             self.radar_gate_lateral_m,
+        )
+        _check(
+            math.isfinite(self.image_motion_margin) and self.image_motion_margin >= 0,
+            "image_motion_margin",
+            "an NCC margin >= 0 (2 or more: no image-motion filter)",
+            self.image_motion_margin,
         )
         for name in ("hog_min_score", "hog_without_motion_min_score"):
             _check(math.isfinite(getattr(self, name)), name, "a finite number", getattr(self, name))

@@ -34,13 +34,15 @@ from .vehicles import Estimate, EventStats, FrameStats, FrameVehicles
 
 # the pedestrian outputs compared: the detector alone (its candidates that passed the size
 # and perspective constraints), after the motion-stereo filter, after the vehicle filter
-# (paper 000's output), after the radar filter and after the HOG verification (both beyond
-# the paper; the last is the engine's output, FINAL_PEDESTRIAN_STAGE)
+# (paper 000's output), after the radar filter, the image-motion filter and the HOG
+# verification (all three beyond the paper; the last is the engine's output,
+# FINAL_PEDESTRIAN_STAGE)
 PEDESTRIAN_STAGES: dict[str, tuple[Verdict, ...]] = {
     "symmetry": FUSION_VERDICTS,
-    "motion_stereo": ("pedestrian", "vehicle", "radar", "hog"),
-    "vehicles": ("pedestrian", "radar", "hog"),
-    "radar": ("pedestrian", "hog"),
+    "motion_stereo": ("pedestrian", "vehicle", "radar", "image_motion", "hog"),
+    "vehicles": ("pedestrian", "radar", "image_motion", "hog"),
+    "radar": ("pedestrian", "image_motion", "hog"),
+    "image_motion": ("pedestrian", "hog"),
     "hog": ("pedestrian",),
 }
 FINAL_PEDESTRIAN_STAGE = "hog"

@@ -46,6 +46,7 @@ PEDESTRIAN_TITLES = {
     "motion_stereo": "+ motion stereo",
     "vehicles": "+ vehicles",
     "radar": "+ radar (beyond)",
+    "image_motion": "+ image motion (beyond)",
     "hog": "+ HOG (beyond)",
 }
 

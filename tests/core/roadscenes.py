@@ -112,3 +112,26 @@ def standing_person(
     rows, cols = np.nonzero(labels == person_id)
     box = (float(cols.min()), float(rows.min()), float(cols.max() + 1), float(rows.max() + 1))
     return image, box
+
+
+def two_frames(
+    ego_speed_mps: float,
+    person_speed_mps: float,
+    ahead_m: float = 12.0,
+    left_m: float = 3.0,
+    dt_s: float = 0.1,
+    person_id: int = 7,
+) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8], tuple[float, float, float, float]]:
+    """(previous frame, this frame, the person's true box on this frame) of a person who
+    walks along the road at person_speed_mps while the car drives at ego_speed_mps."""
+    start = (0.0, ahead_m, left_m)
+    end = (3.0, ahead_m + 3.0 * person_speed_mps, left_m)
+    person = Pedestrian(person_id, 1.75, 150, 40, Trajectory.from_waypoints([start, end]))
+    scene = straight_road(speed_mps=ego_speed_mps, markings=False, pedestrians=(person,))
+    render = RoadRenderer(scene)
+    pitch = camera().extrinsics.pitch_rad
+    previous, _ = render(0.0, pitch, noise=False)
+    image, labels = render(dt_s, pitch, noise=False)
+    rows, cols = np.nonzero(labels == person_id)
+    box = (float(cols.min()), float(rows.min()), float(cols.max() + 1), float(rows.max() + 1))
+    return previous, image, box

@@ -32,6 +32,7 @@ STAGES = {
     "+motion stereo": PEDESTRIAN_STAGES["motion_stereo"],
     "+vehicles": PEDESTRIAN_STAGES["vehicles"],
     "+radar": PEDESTRIAN_STAGES["radar"],
+    "+image motion": PEDESTRIAN_STAGES["image_motion"],
     "+HOG": PEDESTRIAN_STAGES["hog"],
 }
 
@@ -126,7 +127,8 @@ def test_pedestrians_before_and_after_the_fusion_filters(
     assert scores["+motion stereo"].found <= scores["symmetry"].found
     assert scores["+vehicles"].found <= scores["+motion stereo"].found
     assert scores["+radar"].found <= scores["+vehicles"].found
-    assert scores["+HOG"].found <= scores["+radar"].found
+    assert scores["+image motion"].found <= scores["+radar"].found
+    assert scores["+HOG"].found <= scores["+image motion"].found
 
 
 def test_the_hog_verification_leaves_few_false_boxes_on_the_highway(
@@ -154,6 +156,22 @@ def test_the_radar_filter_removes_false_boxes_and_no_true_one(
     # narrowed to 14 px)
     assert after.true_boxes >= before.true_boxes - 1
     assert false_after <= 0.9 * false_before  # today 17-33 % fewer
+
+
+@pytest.mark.parametrize("name", ["highway", "exurban", "stop_and_go"])
+def test_the_image_motion_filter_removes_vehicle_parts_and_few_people(
+    name: str, report: Callable[[str], None]
+) -> None:
+    scores = _pedestrian_scores(name)
+    before, after = scores["+radar"], scores["+image motion"]
+    false_before, false_after = before.boxes - before.true_boxes, after.boxes - after.true_boxes
+    report(f"{name} image-motion filter: false boxes {false_before} -> {false_after}")
+    # people walk: today 1 true box of 44 is lost on exurban,
+    # none on the others; highway 201 -> 102 false boxes, exurban 220 -> 154, stop_and_go
+    # 216 -> 213 (it crawls, and the two places lie too close to tell)
+    assert after.true_boxes >= before.true_boxes - 1
+    if name == "highway":
+        assert false_after <= 0.7 * false_before
 
 
 # today 8, 12, 5 switches over 334, 269, 133 followed frames; with the papers' 2.5 m areas for

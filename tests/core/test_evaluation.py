@@ -458,6 +458,7 @@ def test_json_has_every_figure_with_its_type(stop_and_go_json: dict) -> None:  #
             "motion_stereo",
             "vehicles",
             "radar",
+            "image_motion",
             "hog",
         }
         for p in figures["pedestrians"].values():

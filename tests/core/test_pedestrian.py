@@ -15,11 +15,14 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 
+from core.ego import step
+from core.evaluation.objects import iou
+from core.image_motion import keep
 from core.io.frame import RadarTarget
 from core.params import PedestrianParams
 from core.pedestrian import PedestrianResult, _constraints, bands_for, detect_pedestrians
 from core.synth.scene import Pedestrian, StaticObject, Trajectory
-from tests.core.roadscenes import RoadRenderer, camera, straight_road
+from tests.core.roadscenes import RoadRenderer, camera, straight_road, two_frames
 
 PERSON_ID = 7
 PERSON_S_M, PERSON_D_M, PERSON_HEIGHT_M = 14.0, 2.0, 1.75
@@ -220,6 +223,29 @@ def test_a_person_inside_a_detected_vehicle_is_rejected_with_that_reason() -> No
     assert [c.verdict for c in both.candidates if c.verdict in ("vehicle", "motion_stereo")] == [
         "motion_stereo"
     ]
+
+
+def test_a_person_keeping_pace_with_the_car_is_rejected_by_image_motion() -> None:
+    # the same person seen from a car at 25 m/s, standing and keeping pace with the car
+    # (tests/core/test_image_motion.py renders them); the second moves with the car
+    first, _ = camera().row_window_px
+    ego = step(25.0, 0.0, 0.1)
+
+    def verdicts(person_speed_mps: float, params: PedestrianParams = PARAMS) -> list[str]:
+        previous, image, box = two_frames(25.0, person_speed_mps)
+        result = detect_pedestrians(
+            image, camera(), _mask(255), first, (), (), 25.0, params, keep(previous), ego
+        )
+        return [c.verdict for c in result.candidates if iou(c.extended_box_px, box) >= 0.5]
+
+    assert verdicts(0.0) == ["pedestrian"]
+    assert verdicts(25.0) == ["image_motion"]
+    assert verdicts(25.0, replace(PARAMS, image_motion_margin=2.0)) == ["pedestrian"]
+    previous, image, _ = two_frames(25.0, 0.0)
+    with pytest.raises(
+        ValueError, match=r"previous: expected .* shape \(120, 160\), got \(480, 640\)"
+    ):
+        detect_pedestrians(image, camera(), _mask(255), first, (), (), 25.0, PARAMS, previous, ego)
 
 
 def test_a_person_where_radar_sees_a_fast_target_is_rejected_with_that_reason() -> None:
