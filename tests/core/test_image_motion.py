@@ -38,8 +38,10 @@ def test_a_person_keeping_pace_with_the_car_moves_with_it() -> None:
     previous, image, box = two_frames(25.0, 25.0)
     motion = box_motion(image, keep(previous), camera(), box, *_on_road(box), step(25.0, 0, DT_S))
     assert motion is not None
-    # the legs swing and the road moves behind the person: the match is not perfect
-    assert motion.with_car_ncc > motion.still_ncc + 0.2 and motion.with_car(0.2)
+    # the legs swing and the road moves behind the person: the match is not perfect (a
+    # truck's wheel is rigid); the detector's own box of this person is removed at the
+    # default margin (tests/core/test_pedestrian.py)
+    assert motion.with_car_ncc > motion.still_ncc + 0.1 and motion.with_car(0.1)
 
 
 def test_a_standing_car_cannot_tell_and_says_none() -> None:
