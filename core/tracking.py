@@ -506,8 +506,7 @@ class _TrackState:
         self.box_px = m.box_px
         self.hits, self.misses, self.age = 1, 0, 1
         self.unreturned = 0  # a searched detection never starts a track
-        self.confirm_after = confirm_frames_of(self.kind, params)
-        self.confirmed = self.hits >= self.confirm_after
+        self.confirmed = self.hits >= confirm_frames_of(self.kind, params)
         self.too_fast = False  # a pedestrian track that moved surely faster than a person
         self.source_index: int | None = m.source_index
         self.history_m: tuple[tuple[float, float], ...] = ((self.x, self.y),)
@@ -619,7 +618,9 @@ class _TrackState:
         self.hits += 1
         self.misses = 0
         self.unreturned = 0 if m.for_track is None else self.unreturned + 1
-        self.confirmed = not self.too_fast and (self.confirmed or self.hits >= self.confirm_after)
+        self.confirmed = not self.too_fast and (
+            self.confirmed or self.hits >= confirm_frames_of(self.kind, params)
+        )
         self.source_index = m.source_index
 
     def surely_faster_than(self, speed_mps: float, sigmas: float) -> bool:
