@@ -716,7 +716,9 @@ class FusionEngine:
         pitch.memory.row_histogram.flags.writeable = False
         self._pitch_memory = pitch.memory
         self._vehicle_boxes = boxes
-        self._previous_image = keep_for_image_motion(image)
+        self._previous_image = (
+            keep_for_image_motion(image) if p.pedestrian.image_motion_filter else None
+        )
         self._last = _LastFrame(frame.index, frame.t_ns, from_start)
         return FrameResult(
             index=frame.index,

@@ -578,6 +578,11 @@ class PedestrianParams:
     # the papers' preset)
     keep_off_band_boxes: bool = True
 
+    @property
+    def image_motion_filter(self) -> bool:
+        """Is the image-motion filter on (`image_motion_margin` below 2)?"""
+        return self.image_motion_margin < 2
+
     def __post_init__(self) -> None:
         _positive(
             self,

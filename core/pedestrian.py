@@ -736,7 +736,7 @@ def _moves_with_car(
     params: PedestrianParams,
 ) -> bool:
     """Step 5's image-motion filter (`core.image_motion`); False when it cannot tell."""
-    if previous is None or ego is None or params.image_motion_margin >= 2:
+    if previous is None or ego is None or not params.image_motion_filter:
         return False
     motion = image_motion.box_motion(image, previous, camera, box, distance_m, lateral_m, ego)
     return motion is not None and motion.with_car(params.image_motion_margin)
