@@ -33,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from core.checks import require_grey_image
+from core.resample import box_to_grid
 
 Box = tuple[float, float, float, float]
 
@@ -98,17 +99,10 @@ def people_scores(image: npt.NDArray[np.uint8], boxes_px: Sequence[Box]) -> tupl
     if not boxes_px:
         return ()
     hog, weights, bias = _descriptor_and_svm()
-    w_px, h_px = HOG_WINDOW_PX
     scores = []
     for box in boxes_px:
         if not box[3] > box[1]:
             raise ValueError(f"boxes_px: expected boxes with v1 > v0, got {box!r}")
-        u0, v0, u1, v1 = window_for(box)
-        # the window's pixel edges onto the 64x128 grid (pixel centres at integers)
-        sx, sy = w_px / (u1 - u0), h_px / (v1 - v0)
-        affine = np.array([[sx, 0.0, (0.5 - u0) * sx - 0.5], [0.0, sy, (0.5 - v0) * sy - 0.5]])
-        window = cv2.warpAffine(
-            image, affine, (w_px, h_px), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
-        )
+        window = box_to_grid(image, window_for(box), HOG_WINDOW_PX)
         scores.append(float(np.dot(hog.compute(window).ravel(), weights)) + bias)
     return tuple(scores)

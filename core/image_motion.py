@@ -36,12 +36,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 
 from core.camera import CameraModel
 from core.ego import EgoMotion
+from core.resample import box_to_grid
 
 Box = tuple[float, float, float, float]
 U8Array = npt.NDArray[np.uint8]
@@ -86,15 +86,10 @@ def kept_shape(height_px: int, width_px: int) -> tuple[int, int]:
 
 def _sample(image: U8Array, box: Box, scale: float) -> npt.NDArray[np.float32]:
     """The pixels of `box` (full-image pixels) of `image` held at 1 / scale resolution,
-    resampled to SAMPLE_PX (bilinear, border replicated)."""
-    u0, v0, u1, v1 = (c / scale for c in box)
-    w, h = SAMPLE_PX
-    sx, sy = w / max(u1 - u0, 1e-3), h / max(v1 - v0, 1e-3)
-    affine = np.array([[sx, 0.0, (0.5 - u0) * sx - 0.5], [0.0, sy, (0.5 - v0) * sy - 0.5]])
-    out = cv2.warpAffine(
-        image, affine, SAMPLE_PX, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
-    )
-    return np.asarray(out, np.float32)
+    resampled to SAMPLE_PX."""
+    u0, v0, u1, v1 = box
+    grid = box_to_grid(image, (u0 / scale, v0 / scale, u1 / scale, v1 / scale), SAMPLE_PX)
+    return grid.astype(np.float32)
 
 
 def _ncc(a: npt.NDArray[np.float32], b: npt.NDArray[np.float32]) -> float:
