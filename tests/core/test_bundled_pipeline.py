@@ -143,14 +143,24 @@ def test_the_hog_verification_leaves_few_false_boxes_on_the_highway(
     assert after / frames <= 0.1
 
 
+def _filter_effect(
+    name: str, before_stage: str, after_stage: str, what: str, report: Callable[[str], None]
+) -> tuple[BoxScore, BoxScore, int, int]:
+    """The scores before and after one filter, and the false boxes before and after (reported)."""
+    scores = _pedestrian_scores(name)
+    before, after = scores[before_stage], scores[after_stage]
+    false_before, false_after = before.boxes - before.true_boxes, after.boxes - after.true_boxes
+    report(f"{name} {what}: false boxes {false_before} -> {false_after}")
+    return before, after, false_before, false_after
+
+
 @pytest.mark.parametrize("name", ["highway", "exurban", "stop_and_go"])
 def test_the_radar_filter_removes_false_boxes_and_no_true_one(
     name: str, report: Callable[[str], None]
 ) -> None:
-    scores = _pedestrian_scores(name)
-    before, after = scores["+vehicles"], scores["+radar"]
-    false_before, false_after = before.boxes - before.true_boxes, after.boxes - after.true_boxes
-    report(f"{name} radar filter: false boxes {false_before} -> {false_after}")
+    before, after, false_before, false_after = _filter_effect(
+        name, "+vehicles", "+radar", "radar filter", report
+    )
     # people move slower than a jog: today no true box is lost on highway and exurban,
     # 1 of 98 on stop_and_go (a person beside a car pulling away, since the pitch region
     # narrowed to 14 px)
@@ -162,13 +172,12 @@ def test_the_radar_filter_removes_false_boxes_and_no_true_one(
 def test_the_image_motion_filter_removes_vehicle_parts_and_few_people(
     name: str, report: Callable[[str], None]
 ) -> None:
-    scores = _pedestrian_scores(name)
-    before, after = scores["+radar"], scores["+image motion"]
-    false_before, false_after = before.boxes - before.true_boxes, after.boxes - after.true_boxes
-    report(f"{name} image-motion filter: false boxes {false_before} -> {false_after}")
-    # people walk: today 1 true box of 44 is lost on exurban,
-    # none on the others; highway 201 -> 102 false boxes, exurban 220 -> 154, stop_and_go
-    # 216 -> 213 (it crawls, and the two places lie too close to tell)
+    before, after, false_before, false_after = _filter_effect(
+        name, "+radar", "+image motion", "image-motion filter", report
+    )
+    # people walk: today 1 true box of 44 is lost on exurban, none on the others; highway
+    # 201 -> 102 false boxes, exurban 220 -> 154, stop_and_go 216 -> 213 (it crawls, and the
+    # two places lie too close to tell)
     assert after.true_boxes >= before.true_boxes - 1
     if name == "highway":
         assert false_after <= 0.7 * false_before
