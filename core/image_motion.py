@@ -36,6 +36,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import numpy.typing as npt
 
@@ -84,18 +85,29 @@ def kept_shape(height_px: int, width_px: int) -> tuple[int, int]:
     return -(-height_px // PREVIOUS_SCALE), -(-width_px // PREVIOUS_SCALE)
 
 
-def _sample(image: U8Array, box: Box, scale: float) -> npt.NDArray[np.float32]:
+def _sample(image: U8Array, box: Box, scale: float) -> U8Array:
     """The pixels of `box` (full-image pixels) of `image` held at 1 / scale resolution,
     resampled to SAMPLE_PX."""
     u0, v0, u1, v1 = box
-    grid = box_to_grid(image, (u0 / scale, v0 / scale, u1 / scale, v1 / scale), SAMPLE_PX)
-    return grid.astype(np.float32)
+    return box_to_grid(image, (u0 / scale, v0 / scale, u1 / scale, v1 / scale), SAMPLE_PX)
 
 
-def _ncc(a: npt.NDArray[np.float32], b: npt.NDArray[np.float32]) -> float:
-    a, b = a - a.mean(), b - b.mean()
-    norm = math.sqrt(float((a * a).sum()) * float((b * b).sum()))
-    return float((a * b).sum()) / norm if norm > 1e-6 else 0.0
+@numba.njit(cache=True, nogil=True)
+def _ncc(a: U8Array, b: U8Array) -> float:
+    """Normalised cross-correlation of two samples of the same shape, 0 when either is flat
+    (compiled: three small numpy reductions a box cost more than the resampling)."""
+    n = a.size
+    sum_a = sum_b = sum_aa = sum_bb = sum_ab = 0.0
+    for x, y in zip(a.ravel(), b.ravel()):
+        sum_a += x
+        sum_b += y
+        sum_aa += float(x) * x
+        sum_bb += float(y) * y
+        sum_ab += float(x) * y
+    var_a = sum_aa - sum_a * sum_a / n
+    var_b = sum_bb - sum_b * sum_b / n
+    norm = math.sqrt(max(var_a, 0.0) * max(var_b, 0.0))
+    return (sum_ab - sum_a * sum_b / n) / norm if norm > 1e-6 else 0.0
 
 
 def box_motion(
