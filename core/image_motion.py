@@ -98,12 +98,14 @@ def _ncc(a: U8Array, b: U8Array) -> float:
     (compiled: three small numpy reductions a box cost more than the resampling)."""
     n = a.size
     sum_a = sum_b = sum_aa = sum_bb = sum_ab = 0.0
-    for x, y in zip(a.ravel(), b.ravel()):
+    flat_a, flat_b = a.ravel(), b.ravel()
+    for k in range(n):
+        x, y = float(flat_a[k]), float(flat_b[k])
         sum_a += x
         sum_b += y
-        sum_aa += float(x) * x
-        sum_bb += float(y) * y
-        sum_ab += float(x) * y
+        sum_aa += x * x
+        sum_bb += y * y
+        sum_ab += x * y
     var_a = sum_aa - sum_a * sum_a / n
     var_b = sum_bb - sum_b * sum_b / n
     norm = math.sqrt(max(var_a, 0.0) * max(var_b, 0.0))
