@@ -359,12 +359,13 @@ def update_tracks(
 ) -> TrackResult:
     """The tracking stage: the tracker's update with this frame's measurements, then the
     boxes of confirmed tracks missed this frame moved to where they are expected
-    (`coasting_boxes`) unless `tracking.coasting_boxes_follow` is off, then each vehicle
-    track's body around its box (`core.vehicle.body_box`, step 12), every box cut to the
-    image (`clipped_to_image`)."""
+    (`coasting_boxes`, a pedestrian's at a walking pace at most) unless
+    `tracking.coasting_boxes_follow` is off, then each vehicle track's body around its box
+    (`core.vehicle.body_box`, step 12), every box cut to the image (`clipped_to_image`)."""
     tracks = tracker.update(measurements, ego, dt_s)
     if params.tracking.coasting_boxes_follow:
-        tracks = coasting_boxes(tracks, camera)
+        step_m = params.tracking.pedestrian_coasting_speed_mps * dt_s
+        tracks = coasting_boxes(tracks, camera, step_m)
     length_m = params.vehicle.body_length_m
     if length_m > 0:  # the papers' boxes have no body (Track.outline_px is box_px)
         tracks = dataclasses.replace(

@@ -717,6 +717,10 @@ class TrackingParams:
     # expects its object, sized for that distance (chosen; false: the last box stays where it
     # was measured, as in the papers' preset; core/tracking.py, `coasting_boxes`)
     coasting_boxes_follow: bool = True
+    # ... a pedestrian's ground point at most this fast from where its track was at its last
+    # hit (chosen: a walking pace; the velocity of a track of a few hits is mostly the noise
+    # of distances read from foot rows; core/tracking.py, step 6)
+    pedestrian_coasting_speed_mps: float = 1.5
 
     def __post_init__(self) -> None:
         _check(self.confirm_frames >= 1, "confirm_frames", "an integer >= 1", self.confirm_frames)
@@ -752,6 +756,7 @@ class TrackingParams:
             "width_sigma_m",
             "initial_velocity_sigma_mps",
             "pedestrian_max_speed_mps",
+            "pedestrian_coasting_speed_mps",
         )
         for name in (
             "guard_rail_accel_psd_m2ps3",

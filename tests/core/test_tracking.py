@@ -623,6 +623,8 @@ def test_duplicate_source_index_and_unknown_kind_are_rejected() -> None:
         ("pedestrian_max_speed_mps", 0.0),
         ("pedestrian_max_speed_mps", math.nan),
         ("pedestrian_speed_gate_sigmas", -1.0),
+        ("pedestrian_coasting_speed_mps", 0.0),
+        ("pedestrian_coasting_speed_mps", math.inf),
     ],
 )
 def test_bad_tracking_params_name_the_field(field: str, value: float) -> None:
@@ -656,6 +658,28 @@ def test_a_coasting_track_shows_its_last_box_where_it_expects_its_object_now() -
     assert result.tracks[0] == dataclasses.replace(coasting, box_px=result.tracks[0].box_px)
     assert result.tracks[1] == measured
     assert result.ended == (7,)
+
+
+def test_a_coasting_pedestrian_moves_at_most_a_step_per_miss_from_its_last_hit() -> None:
+    # measured at (20, 1), then predicted 3 m on (a noisy speed) over 2 misses: at 0.5 m per
+    # miss the box stands 1 m on, at (21, 1); with a long step, where predicted
+    walked = dataclasses.replace(
+        _track(1, 23.0, misses=2, kind="pedestrian"),
+        history_m=((19.0, 1.0), (20.0, 1.0), (21.5, 1.0), (23.0, 1.0)),
+    )
+    short = coasting_boxes(TrackResult((walked,), ()), FLAT_CAMERA, 0.5).tracks[0]
+    long = coasting_boxes(TrackResult((walked,), ()), FLAT_CAMERA, 10.0).tracks[0]
+    assert short.box_px[3] == pytest.approx(240.0 + 700.0 * 1.3 / 21.0)
+    assert long.box_px[3] == pytest.approx(240.0 + 700.0 * 1.3 / 23.0)
+    assert (short.x_m, short.y_m) == (23.0, 1.0)  # the track itself is not moved
+    # a vehicle's box follows its prediction whatever the step
+    car = dataclasses.replace(walked, kind="vehicle")
+    moved = coasting_boxes(TrackResult((car,), ()), FLAT_CAMERA, 0.5).tracks[0]
+    assert moved.box_px[3] == pytest.approx(240.0 + 700.0 * 1.3 / 23.0)
+    # a history too short to reach the last hit: the prediction
+    young = dataclasses.replace(walked, history_m=((23.0, 1.0),))
+    alone = coasting_boxes(TrackResult((young,), ()), FLAT_CAMERA, 0.5).tracks[0]
+    assert alone.box_px[3] == pytest.approx(240.0 + 700.0 * 1.3 / 23.0)
 
 
 def test_only_confirmed_coasting_boxes_in_front_of_the_camera_move() -> None:
