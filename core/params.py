@@ -717,7 +717,7 @@ class TrackingParams:
     # expects its object, sized for that distance (chosen; false: the last box stays where it
     # was measured, as in the papers' preset; core/tracking.py, `coasting_boxes`)
     coasting_boxes_follow: bool = True
-    # ... a pedestrian's ground point at most this fast from where its track was at its last
+    # there, a pedestrian's box stands at most this fast from where its track was at its last
     # hit (chosen: a walking pace; the velocity of a track of a few hits is mostly the noise
     # of distances read from foot rows; core/tracking.py, step 6)
     pedestrian_coasting_speed_mps: float = 1.5
