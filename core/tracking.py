@@ -126,11 +126,11 @@ Notes:
       pedestrian MOTA up by 0.01-0.02; highway, the vehicles and the real drives the same.
       1.0 m/s did as well or a little better (held out stop_and_go 0.646 / 0.985; kept at
       1.5, a normal walking pace, rather than the synthetic walkers' own), 2.0 and 3.0 less
-      (exurban precision 0.931, 0.920); the box left
-      where the track was at its last hit (no walking) lost stop_and_go's crossing people
-      (0.613 / 0.969); a prior of 1-4 m/s on a new pedestrian's velocity instead of 15
-      made it worse (exurban precision 0.86-0.90). Not showing the coasting boxes of
-      tracks under 3 hits gave exurban 0.223 / 0.986, the raw detections' figures.
+      (exurban precision 0.931, 0.920); the box left where the track was at its last hit
+      (no walking) lost stop_and_go's crossing people (0.613 / 0.969); a prior of 1-4 m/s
+      on a new pedestrian's velocity instead of 15 made it worse (exurban precision
+      0.86-0.90). Not showing the coasting boxes of tracks under 3 hits gave exurban 0.223
+      / 0.986, the raw detections' figures.
     - Step 7: the truth boxes of the evaluation are the visible parts, which end at the
       image border; oncoming and overtaking cars 3-10 m away in the next lane ran off the
       image while their coasting boxes (and their bodies) kept the whole vehicle, IoU 0 with
