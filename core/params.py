@@ -287,6 +287,11 @@ class VehicleParams:
     # targets lie within this distance of each other, a chain of them for a long truck
     # (the papers' preset: 1000 m, beyond any radar's range: overlap alone decides)
     merge_max_gap_m: float = 5.0
+    # beyond the papers (core/vehicle.py, step 10): a vehicle whose box ends on a nearer
+    # vehicle's on one side, which hides it there, is this wide (or as wide as seen, when
+    # wider), its lateral position taken from its other side (chosen: a passenger car's or
+    # van's width, 1.6-2.1 m, within refined_error_m; 0: off, the papers' preset)
+    hidden_side_width_m: float = 1.85
     # beyond the papers: a vehicle is as far as its nearest target, the one nearest its near
     # face (the papers' preset: False, the mean of its targets)
     distance_of_nearest_target: bool = True
@@ -307,6 +312,12 @@ class VehicleParams:
             "body_length_m",
             "a length in metres >= 0 (0: the rear face alone)",
             self.body_length_m,
+        )
+        _check(
+            math.isfinite(self.hidden_side_width_m) and self.hidden_side_width_m >= 0,
+            "hidden_side_width_m",
+            "a width in metres >= 0 (0: off)",
+            self.hidden_side_width_m,
         )
         _check(
             math.isfinite(self.truck_height_ratio) and self.truck_height_ratio >= 0,

@@ -4,8 +4,9 @@ Each line holds the frame's index and time, the pitch, the stage timings, the pa
 per-frame detections (vehicles; pedestrian candidates with their verdicts; radar targets
 labelled guard rail) and the tracker's confirmed tracks. Boxes are (u0, v0, u1, v1) in
 full-image pixels: a vehicle's box_px is its rear face, as vision measured it, its body_px
-the whole vehicle as shown (`core.vehicle`, step 12); positions are in the vehicle frame (x
-forward, y left, metres).
+the whole vehicle as shown (`core.vehicle`, step 12), its hidden_side "left" or "right" when
+a nearer vehicle hides that side and its width is assumed, not measured (step 10), else null;
+positions are in the vehicle frame (x forward, y left, metres).
 """
 
 from __future__ import annotations
@@ -58,6 +59,7 @@ def frame_record(result: FrameResult) -> dict[str, Any]:
                 "distance_m": _number(v.distance_m, 3),
                 "lateral_m": _number(v.lateral_m, 3),
                 "width_m": _number(v.width_m, 3),
+                "hidden_side": v.hidden_side,
                 "radar_targets": list(v.target_indices),
             }
             for v in result.vehicle.vehicles

@@ -26,13 +26,18 @@ from core.symmetry import (
     sobel,
     symmetry_matrix,
 )
-from core.synth.scene import Trajectory, Vehicle
+from core.synth.scene import Trajectory
+from core.synth.scene import Vehicle as SceneVehicle
 from core.vehicle import (
+    Vehicle,
     body_box,
     border_top,
     detect_vehicles,
+    hidden_sides,
+    measured_past_hidden_sides,
     merge_boxes,
     truck_top,
+    world_extents,
     world_size_ok,
 )
 
@@ -371,7 +376,7 @@ def rendered_car() -> tuple[np.ndarray, np.ndarray]:
     road and camera; the image and its object labels."""
     length = 4.4
     keys = [(0.0, 20.0 + length / 2, 1.0), (10.0, 20.0 + length / 2, 1.0)]
-    car = Vehicle(1, "car", length, 1.8, 1.5, 70, Trajectory.from_waypoints(keys))
+    car = SceneVehicle(1, "car", length, 1.8, 1.5, 70, Trajectory.from_waypoints(keys))
     render = RoadRenderer(straight_road(speed_mps=0.0, vehicles=[car]), seed=1)
     return render(0.0, camera().extrinsics.pitch_rad)
 
@@ -432,7 +437,7 @@ def test_the_top_rises_to_where_the_vehicles_sides_end(
     """Step 11: the box's top is the vehicle's roof, for a car as for a truck taller than
     the area; without the image (the papers' fixed ratio) a truck's box stops far short."""
     keys = [(0.0, 20.0 + 3.0, 1.0), (10.0, 20.0 + 3.0, 1.0)]
-    body = Vehicle(1, cls, 6.0, width_m, height_m, grey, Trajectory.from_waypoints(keys))
+    body = SceneVehicle(1, cls, 6.0, width_m, height_m, grey, Trajectory.from_waypoints(keys))
     image, labels = RoadRenderer(straight_road(speed_mps=0.0, vehicles=[body]), seed=1)(
         0.0, camera().extrinsics.pitch_rad
     )
@@ -740,3 +745,58 @@ def test_bad_parameters_name_the_field() -> None:
 def test_search_areas_reject_a_bad_image() -> None:
     with pytest.raises(ValueError, match="image"):
         search_areas(np.zeros((10, 10), dtype=np.float32), flat_camera(), (), PARAMS)
+
+
+# --- vehicles hidden on one side ------------------------------------------------------------
+
+
+def _vehicle(box_px: tuple[float, float, float, float], distance_m: float) -> Vehicle:
+    """A vehicle with its box on the flat camera at `distance_m` (f = 800 px, centre column
+    319.5): lateral position and width as world_extents gives them."""
+    cam = flat_camera()
+    (lateral,), (width,), (vision,) = world_extents([box_px], [distance_m], cam)
+    return Vehicle(box_px, distance_m, lateral, width, vision, (0,))
+
+
+def test_a_box_ending_on_a_nearer_vehicle_is_hidden_on_that_side() -> None:
+    near = _vehicle((280.0, 250.0, 360.0, 300.0), 16.0)  # 1.6 m wide, 16 m ahead
+    # 32 m ahead, its left side on the near car's right side (2 px off), rows in common
+    far_right = _vehicle((362.0, 230.0, 398.0, 262.0), 32.0)
+    far_left = _vehicle((250.0, 230.0, 281.0, 262.0), 32.0)  # its right side on the near left
+    apart = _vehicle((380.0, 230.0, 420.0, 262.0), 32.0)  # 20 px from the near car
+    above = _vehicle((362.0, 200.0, 398.0, 240.0), 32.0)  # no row in common
+    sides = hidden_sides([near, far_right, far_left, apart, above])
+    assert sides == [None, "left", "right", None, None]
+    # a nearer vehicle is not hidden by a farther one, nor one by a vehicle at its distance
+    assert hidden_sides([dataclasses.replace(near, distance_m=40.0), far_right])[1] is None
+    assert hidden_sides([dataclasses.replace(near, distance_m=31.0), far_right])[1] is None
+    # both sides on nearer vehicles: neither is known
+    both = _vehicle((362.0, 230.0, 398.0, 262.0), 32.0)
+    other = _vehicle((399.0, 250.0, 460.0, 300.0), 16.0)
+    assert hidden_sides([near, both, other])[1] is None
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_a_vehicle_hidden_on_one_side_is_measured_from_the_other(side: str) -> None:
+    """36 px seen at 32 m are 1.44 m: the vehicle is hidden_side_width_m wide, with its seen
+    side where its box has it; its box stays what the camera shows."""
+    box = (362.0, 230.0, 398.0, 262.0)
+    near_box = (280.0, 250.0, 364.0, 300.0) if side == "left" else (396.0, 250.0, 470.0, 300.0)
+    far = _vehicle(box, 32.0)
+    assert far.width_m == pytest.approx(36 * 32.0 / 800.0)
+    width = PARAMS.hidden_side_width_m
+    near, measured = measured_past_hidden_sides([_vehicle(near_box, 16.0), far], width)
+    assert near.hidden_side is None
+    assert near.width_m == pytest.approx((near_box[2] - near_box[0]) * 16.0 / 800.0)
+    assert measured.hidden_side == side and measured.width_m == width
+    if side == "left":  # the right side (smaller y) is seen
+        expected = far.lateral_m - far.width_m / 2 + width / 2
+    else:
+        expected = far.lateral_m + far.width_m / 2 - width / 2
+    assert measured.lateral_m == pytest.approx(expected)
+    assert measured.box_px == box
+    # seen wider than that: the width seen stays, and so does the lateral position
+    wide = _vehicle((340.0, 230.0, 398.0, 262.0), 32.0)  # 2.32 m
+    (_, kept) = measured_past_hidden_sides([_vehicle(near_box, 16.0), wide], width)
+    assert kept.width_m == pytest.approx(wide.width_m)
+    assert kept.lateral_m == pytest.approx(wide.lateral_m)
