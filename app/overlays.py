@@ -215,7 +215,8 @@ def put_vehicle_boxes(
     `VEHICLE_COLOUR` (in dashes those without a
     radar target, found where a track expected them: `core.track_search`), and the boxes the
     size filter dropped (targets with verdict "size_filter") in `VEHICLE_REJECTED_COLOUR`
-    tagged "size".
+    tagged "size"; a vehicle a nearer one hides on one side (`Vehicle.hidden_side`, its
+    width assumed) is tagged "hidden left" or "hidden right".
 
     vehicles: `VehicleResult.vehicles`; targets: `VehicleResult.targets`.
     """
@@ -228,6 +229,9 @@ def put_vehicle_boxes(
             _tag(out, "size", c0, r0 - 1, VEHICLE_REJECTED_COLOUR)
     for v in vehicles:
         _outline(out, v.outline_px, VEHICLE_COLOUR, BOX_THICKNESS_PX, dashed=not v.target_indices)
+        if v.hidden_side is not None:
+            c0, r0, _, _ = box_pixels(v.outline_px)
+            _tag(out, f"hidden {v.hidden_side}", c0, r0 - 1, VEHICLE_COLOUR)
 
 
 # --- guard rails (paper 002) ----------------------------------------------------------------

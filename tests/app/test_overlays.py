@@ -202,6 +202,14 @@ def test_vehicle_box_draws_exactly_its_outline_in_the_vehicle_colour() -> None:
     assert not out[~expected].any()
 
 
+def test_a_vehicle_hidden_on_one_side_is_tagged_so() -> None:
+    hidden = dataclasses.replace(vehicle((99.5, 199.5, 180.5, 260.5)), hidden_side="left")
+    out = drawn(overlays.put_vehicle_boxes, black(), [hidden])
+    plain = drawn(overlays.put_vehicle_boxes, black(), [vehicle((99.5, 199.5, 180.5, 260.5))])
+    np.testing.assert_array_equal(out[200:], plain[200:])  # the same box
+    assert out[185:199, 100:160].any() and not plain[:199].any()  # the tag above it
+
+
 def test_a_vehicle_without_radar_and_a_searched_area_are_drawn_in_dashes() -> None:
     searched = dataclasses.replace(vehicle((99.5, 199.5, 180.5, 260.5)), target_indices=())
     out = drawn(overlays.put_vehicle_boxes, black(), [searched])
