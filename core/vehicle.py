@@ -711,9 +711,7 @@ def hidden_sides(vehicles: Sequence[Vehicle]) -> list[Literal["left", "right"] |
     return out
 
 
-def measured_past_hidden_sides(
-    vehicles: Sequence[Vehicle], width_m: float
-) -> tuple[Vehicle, ...]:
+def measured_past_hidden_sides(vehicles: Sequence[Vehicle], width_m: float) -> tuple[Vehicle, ...]:
     """Step 10, beyond the papers: each vehicle that a nearer one hides on one side
     (`hidden_sides`) made `width_m` wide (its visible width when wider), its lateral position
     measured from its other side (positive y is the image's left); the others as they are."""
