@@ -335,6 +335,8 @@ Verdict = Literal[
 ]
 
 Box = tuple[float, float, float, float]
+# The side of a box a nearer vehicle hides (step 10)
+Side = Literal["left", "right"]
 U8Array = npt.NDArray[np.uint8]
 
 # Step 11: a border's vertical edge may lie this many columns off the box's side.
@@ -416,7 +418,7 @@ class Vehicle:
     vision_distance_m: float
     target_indices: tuple[int, ...]
     body_px: Box | None = None
-    hidden_side: Literal["left", "right"] | None = None
+    hidden_side: Side | None = None
 
     @property
     def outline_px(self) -> Box:
@@ -692,10 +694,10 @@ def body_box(box_px: Box, distance_m: float, camera: CameraModel, length_m: floa
     return (min(u0, far[0]), min(v0, far[1]), max(u1, far[2]), max(v1, far[3]))
 
 
-def hidden_sides(vehicles: Sequence[Vehicle]) -> list[Literal["left", "right"] | None]:
+def hidden_sides(vehicles: Sequence[Vehicle]) -> list[Side | None]:
     """Step 10, beyond the papers: for each vehicle, the side of its box that ends on a
     nearer vehicle's box (module docstring), None when neither or both do."""
-    out: list[Literal["left", "right"] | None] = []
+    out: list[Side | None] = []
     for v in vehicles:
         u0, v0, u1, v1 = v.box_px
         left = right = False
