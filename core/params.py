@@ -582,12 +582,21 @@ class PedestrianParams:
     verify_with_hog: bool = True
     hog_min_score: float = 0.3
     hog_without_motion_min_score: float = 0.5
+    # beyond the papers (core/pedestrian.py, step 6): a person's box that ends rejected is
+    # replaced by the first of up to this many other boxes framing the same person (those
+    # the one-box-per-person choice left out, in its order) that passes steps 5-6; 0 keeps
+    # the one box chosen (the papers' preset)
+    hog_alternatives: int = 5
     # beyond the papers (core/pedestrian.py, step 4): a box whose base stands off its band's
     # distance (the scan seeded it in a farther or nearer band) is kept when its height and
     # width are a person's there, ranking after the boxes that stand at their band's distance
     # when one box per person is chosen (False: the "perspective" constraint rejects it,
     # the papers' preset)
     keep_off_band_boxes: bool = True
+    # beyond the papers (core/pedestrian.py, step 4): a body still going on at the head row of
+    # the tallest person standing where the box's base is has no top (False: at that of the
+    # tallest person standing at its band's distance, the papers' preset)
+    head_row_at_base: bool = True
 
     @property
     def image_motion_filter(self) -> bool:
@@ -631,6 +640,12 @@ class PedestrianParams:
         )
         _check(self.scan_bins >= 8, "scan_bins", "an integer >= 8", self.scan_bins)
         _check(self.max_candidates >= 1, "max_candidates", "an integer >= 1", self.max_candidates)
+        _check(
+            self.hog_alternatives >= 0,
+            "hog_alternatives",
+            "an integer >= 0",
+            self.hog_alternatives,
+        )
         _fraction(
             self,
             "border_column_fraction",

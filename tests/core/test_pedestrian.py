@@ -15,12 +15,19 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 
+from core import hog
 from core.ego import step
 from core.evaluation.objects import iou
 from core.image_motion import keep
 from core.io.frame import RadarTarget
 from core.params import PedestrianParams
-from core.pedestrian import PedestrianResult, _constraints, bands_for, detect_pedestrians
+from core.pedestrian import (
+    PedestrianResult,
+    _constraints,
+    _px_per_m,
+    bands_for,
+    detect_pedestrians,
+)
 from core.synth.scene import Pedestrian, StaticObject, Trajectory
 from tests.core.roadscenes import RoadRenderer, camera, straight_road, two_frames
 
@@ -294,6 +301,47 @@ def test_the_hog_verification_keeps_a_person_and_says_why_it_drops_a_box() -> No
     u0, v0, u1, v1 = _truth_box(labels)
     rejected = _detect(image, vehicles=((u0 - 20, v0 - 10, u1 + 20, v1 + 5),)).candidates
     assert rejected and all(math.isnan(c.hog_score) for c in rejected)
+
+
+def test_a_rejected_box_gives_way_to_another_framing_the_same_person(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    image, labels = _scene("person")
+    truth = _truth_box(labels)
+    (chosen,) = _detect(image).kept
+    # an SVM that rejects every box it sees first (the chosen ones) and keeps the others
+    calls: list[list[Box]] = []
+
+    def first_rejected(_: npt.NDArray[np.uint8], boxes: list[Box]) -> tuple[float, ...]:
+        calls.append(list(boxes))
+        return tuple(-5.0 if len(calls) == 1 else 5.0 for _ in boxes)
+
+    monkeypatch.setattr(hog, "people_scores", first_rejected)
+    result = _detect(image)
+    (kept,) = result.kept
+    assert calls[0] == [chosen.extended_box_px]  # the chosen box first, then another
+    assert kept.extended_box_px != chosen.extended_box_px and kept.hog_score == 5.0
+    # it frames the person head to feet, and replaces the chosen box: one box per person
+    assert abs(kept.extended_box_px[1] - truth[1]) <= 2
+    assert abs(kept.extended_box_px[3] - truth[3]) <= 2
+    assert iou(kept.extended_box_px, truth) >= 0.6 and _on(result, truth) == ["pedestrian"]
+    # no alternatives (the papers' preset): the chosen box stays, rejected
+    calls.clear()
+    alone = _detect(image, params=replace(PARAMS, hog_alternatives=0))
+    assert alone.kept == () and _on(alone, truth) == ["hog"] and len(calls) == 1
+
+
+def test_the_height_scale_on_the_road_follows_the_bands() -> None:
+    bands = bands_for(camera(), PARAMS)
+    # on a flat road it is linear in the row: the fit goes through every band's figure,
+    # within the half row the foot rows are rounded to
+    fitted = _px_per_m(bands, bands.foot_row_px)
+    slope = (bands.px_per_m[0] - bands.px_per_m[-1]) / (
+        bands.foot_row_px[0] - bands.foot_row_px[-1]
+    )
+    assert np.abs(fitted - bands.px_per_m).max() <= 0.5 * slope
+    # and beyond them: nearer than the nearest band it is larger
+    assert _px_per_m(bands, bands.foot_row_px[:1] + 20)[0] > bands.px_per_m[0]
 
 
 def test_an_empty_road_has_no_pedestrian() -> None:
