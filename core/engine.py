@@ -642,7 +642,9 @@ class FusionEngine:
         )
 
         def guard() -> tuple[tuple[SearchArea, ...], GuardRailResult, tuple[RailLine, ...]]:
-            tracked_m = [(t.x_m, t.y_m) for t in predicted] if p.vehicle.track_gate_m > 0 else []
+            tracked_m = (
+                [(t.x_m, t.y_m, t.width_m) for t in predicted] if p.vehicle.track_gate_m > 0 else []
+            )
             centres_y_m, self._radar_points = smooth_centres(
                 self._radar_points,
                 frame.radar,

@@ -242,6 +242,10 @@ class VehicleParams:
     # or a post has borders only where the background happens to pair (0: off, the papers'
     # preset)
     min_border_pairs_per_row: float = 0.3
+    # beyond the papers (core/vehicle.py Notes, step 6): an axis that qualifies in the area of
+    # a tracked vehicle takes its half-width within this much of the track's width when one
+    # there reaches the threshold with the border pairs (0: off, the papers' preset)
+    track_width_tolerance_m: float = 0.4
     # share of a box's columns with a shadow-to-road edge for its bottom (paper: "shadow";
     # no figure). A vehicle's shadow and wheels end on the road across its whole width; at
     # 0.5 (the papers' preset) rail posts, clutter and parts of vehicles passed too
@@ -306,6 +310,12 @@ class VehicleParams:
             "min_border_pairs_per_row",
             "a number of pairs per row >= 0 (0: off)",
             self.min_border_pairs_per_row,
+        )
+        _check(
+            math.isfinite(self.track_width_tolerance_m) and self.track_width_tolerance_m >= 0,
+            "track_width_tolerance_m",
+            "a width >= 0 (0: off)",
+            self.track_width_tolerance_m,
         )
         _check(
             math.isfinite(self.body_length_m) and self.body_length_m >= 0,

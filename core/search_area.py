@@ -109,7 +109,8 @@ class SearchArea:
     world (vehicle frame), at the target's x_m; patch: (h, w) uint8 grey, the crop resampled;
     px_per_m: patch pixels per metre across at the target's distance; moving: the target
     moves over ground (`moves`); tracked: the target lies within `track_gate_m` of where a
-    confirmed vehicle track is expected (`tracked_y_m`);
+    confirmed vehicle track is expected (`tracked_vehicle`), tracked_width_m that track's
+    filtered width (NaN when not tracked, or its width is unknown);
     too_far: the area has fewer than `min_image_px_per_m` image pixels per metre across
     (`image_px_per_m`), too coarse for vision: neither checked for a guard rail nor searched
     for a vehicle. The patch is an array of its own (C-contiguous, writable), never a view of
@@ -128,6 +129,7 @@ class SearchArea:
     moving: bool = False
     tracked: bool = False
     too_far: bool = False
+    tracked_width_m: float = math.nan
 
     @property
     def x_m(self) -> float:
@@ -196,15 +198,19 @@ def overlap_fraction(a: SearchArea, b: SearchArea) -> float:
     return intersection_area(a.box_px, b.box_px) / max(1.0, rect_area(b.box_px))
 
 
-def tracked_y_m(
-    target: RadarTarget, params: VehicleParams, tracked_m: Sequence[tuple[float, float]]
-) -> float | None:
-    """The lateral position of the tracked vehicle whose expected position (x_m, y_m) in
-    `tracked_m` lies nearest the target, within `track_gate_m` (None: none does)."""
+def tracked_vehicle(
+    target: RadarTarget,
+    params: VehicleParams,
+    tracked_m: Sequence[tuple[float, float, float]],
+) -> tuple[float, float] | None:
+    """(lateral position, width) of the tracked vehicle whose expected position (x_m, y_m)
+    in `tracked_m` ((x_m, y_m, width_m) each) lies nearest the target, within
+    `track_gate_m` (None: none does)."""
     nearest = min(
-        ((math.hypot(target.x_m - x, target.y_m - y), y) for x, y in tracked_m), default=None
+        ((math.hypot(target.x_m - x, target.y_m - y), y, w) for x, y, w in tracked_m),
+        default=None,
     )
-    return None if nearest is None or nearest[0] > params.track_gate_m else nearest[1]
+    return None if nearest is None or nearest[0] > params.track_gate_m else nearest[1:]
 
 
 def moves(target: RadarTarget, ego_speed_mps: float, params: VehicleParams) -> bool:
@@ -216,7 +222,7 @@ def moves(target: RadarTarget, ego_speed_mps: float, params: VehicleParams) -> b
 def search_width_m(moving: bool, tracked: bool, params: VehicleParams) -> float:
     """The world width of a target's area (step 2): `moving_search_width_m` when it is
     `moving` (`moves`) or `tracked` (within `track_gate_m` of a tracked vehicle's expected
-    position, `tracked_y_m`), else `search_width_m`."""
+    position, `tracked_vehicle`), else `search_width_m`."""
     return params.moving_search_width_m if moving or tracked else params.search_width_m
 
 
@@ -226,7 +232,7 @@ def search_areas(
     radar: tuple[RadarTarget, ...],
     params: VehicleParams,
     ego_speed_mps: float = math.nan,
-    tracked_m: Sequence[tuple[float, float]] = (),
+    tracked_m: Sequence[tuple[float, float, float]] = (),
     centres_y_m: Sequence[float] | None = None,
 ) -> tuple[SearchArea, ...]:
     """The areas of the targets of `radar` whose base point lands inside `image`, in radar
@@ -234,9 +240,10 @@ def search_areas(
 
     image: (H, W) uint8 grey, the full camera frame; camera: the frame's camera model (with
     the detected pitch); ego_speed_mps: the car's speed, which tells moving targets (NaN,
-    unknown: every area is `search_width_m` wide, unless tracked); tracked_m: (x_m, y_m)
-    where the tracker expects the vehicles it follows on this frame (`search_width_m`; with
-    `centre_on_track`, their areas are centred on them); centres_y_m: the lateral centre of
+    unknown: every area is `search_width_m` wide, unless tracked); tracked_m: (x_m, y_m,
+    width_m) where the tracker expects the vehicles it follows on this frame, and their
+    widths (`moving_search_width_m`; with `centre_on_track`, their areas are centred on
+    them); centres_y_m: the lateral centre of
     each other target's area (`core.radar_smoothing`; None: its radar point's y_m, the
     paper's). ValueError when centres_y_m is not one per target.
     """
@@ -250,7 +257,8 @@ def search_areas(
         raise ValueError(
             f"centres_y_m: expected one per radar target ({len(radar)}), got {len(centres_y_m)}"
         )
-    on_track = [tracked_y_m(t, params, tracked_m) for t in radar]
+    tracks = [tracked_vehicle(t, params, tracked_m) for t in radar]
+    on_track = [None if k is None else k[0] for k in tracks]
     if params.centre_on_track:
         centres_y_m = [c if y is None else y for c, y in zip(centres_y_m, on_track, strict=True)]
     moving = [moves(t, ego_speed_mps, params) for t in radar]
@@ -298,6 +306,7 @@ def search_areas(
                 moving=moving[i],
                 tracked=on_track[i] is not None,
                 too_far=width_px / widths_m[i] < params.min_image_px_per_m,
+                tracked_width_m=math.nan if tracks[i] is None else tracks[i][1],
             )
         )
     return tuple(areas)

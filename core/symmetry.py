@@ -181,6 +181,8 @@ def candidate_axes(
     min_half_px: int,
     max_half_px: int,
     min_border_pairs: int = 0,
+    preferred_min_half_px: int = 0,
+    preferred_max_half_px: int = 0,
 ) -> FloatArray:
     """Step 6: (C, 4) float64 rows (axis column a, half-width row k, chi, half_width_px) of
     the candidate axes, one per run of neighbouring axes that qualify.
@@ -188,7 +190,10 @@ def candidate_axes(
     An axis qualifies when chi stays below `threshold` for half-widths < narrow_half_px and
     reaches it at the half-width in min_half_px .. max_half_px with the most pairs summed
     with its neighbours (the first on ties), and those pairs (the borders') number at least
-    min_border_pairs; k: that half-width's row (half-width k + 1).
+    min_border_pairs; k: that half-width's row (half-width k + 1). A qualified axis takes
+    instead the half-width of preferred_min_half_px .. preferred_max_half_px with the most
+    pairs so summed when chi reaches the threshold there with min_border_pairs (none
+    preferred when the range is empty, the default): a tracked vehicle's width.
     """
     n_rows, n_axes = chi.shape
     k_min, k_max = max(min_half_px, 1) - 1, min(max_half_px, n_rows)
@@ -210,6 +215,17 @@ def candidate_axes(
         if not ok:
             run_open = False
             continue
+        # a qualified axis takes its half-width in the preferred range when one there qualifies
+        pref_k, pref_near = -1, 0
+        for k in range(max(preferred_min_half_px, 1) - 1, min(preferred_max_half_px, k_max)):
+            if k < k_min:
+                continue
+            near = pairs[k, a] + (pairs[k - 1, a] if k > 0 else 0)
+            near += pairs[k + 1, a] if k + 1 < n_rows else 0
+            if near > pref_near:
+                pref_k, pref_near = k, near
+        if pref_k >= 0 and chi[pref_k, a] >= threshold and pref_near >= min_border_pairs:
+            best_k = pref_k
         if run_open and chi[best_k, a] <= found[count - 1, CHI]:
             continue  # the run's best so far stays
         if not run_open:
@@ -281,17 +297,28 @@ def search(
     min_height_ratio: float,
     min_border_pairs: int = 0,
     highest_bottom: int = 0,
+    preferred_min_half_px: int = 0,
+    preferred_max_half_px: int = 0,
 ) -> tuple[I8Array, F32Array, FloatArray, int]:
     """Steps 4-8 on one area: (edges (h, w), chi (max_half_width_px, 2 w - 1), candidates,
     chosen). candidates: (C, 6) float64 rows indexed by AXIS, ROW, CHI, HALF_PX, BOTTOM, TOP
     (rows, -1 where none); chosen: the candidate with a bottom whose axis is nearest
-    `centre_col_px` (the radar point's column, in patch pixel-edge columns), -1 when none.
+    `centre_col_px` (the radar point's column, in patch pixel-edge columns), -1 when none;
+    preferred_min_half_px, preferred_max_half_px: half-widths `candidate_axes` prefers.
     """
     edges = signed_edges(sobel(patch, 1), edge_threshold)
     pairs, n = mirrored_pairs(edges, max_half_width_px)
     chi = chi_matrix(pairs, n)
     axes = candidate_axes(
-        chi, pairs, threshold, narrow_half_px, min_half_px, max_half_px, min_border_pairs
+        chi,
+        pairs,
+        threshold,
+        narrow_half_px,
+        min_half_px,
+        max_half_px,
+        min_border_pairs,
+        preferred_min_half_px,
+        preferred_max_half_px,
     )
     candidates = np.full((len(axes), 6), -1.0)
     candidates[:, :4] = axes

@@ -161,7 +161,7 @@ def search_tracks(
         stand_ins,
         params,
         ego_speed_mps,
-        [(t.x_m, t.y_m) for t in tracks],
+        [(t.x_m, t.y_m, t.width_m) for t in tracks],
         [t.y_m for t in tracks],
     )
     search = detect_vehicles(areas, stand_ins, camera, params, frozenset(), image)

@@ -144,16 +144,16 @@ def test_a_still_target_where_a_tracked_vehicle_is_expected_gets_the_wider_area(
     still = target(25.0, 1.0, -ego_mps * math.cos(bearing))  # a stopped car
     gate = PARAMS.track_gate_m
 
-    def width(tracked_m: list[tuple[float, float]], params: VehicleParams = PARAMS) -> float:
+    def width(tracked_m: list[tuple[float, float, float]], params: VehicleParams = PARAMS) -> float:
         (a,) = search_areas(image, cam, (still,), params, ego_mps, tracked_m)
         return a.y_left_m - a.y_right_m
 
     assert width([]) == pytest.approx(PARAMS.search_width_m)
-    assert width([(25.0 + 0.9 * gate, 1.0)]) == pytest.approx(PARAMS.moving_search_width_m)
-    assert width([(25.0, 1.0 - 0.9 * gate)]) == pytest.approx(PARAMS.moving_search_width_m)
-    assert width([(25.0 + 1.1 * gate, 1.0), (40.0, -3.0)]) == pytest.approx(2.5)
+    assert width([(25.0 + 0.9 * gate, 1.0, 1.8)]) == pytest.approx(PARAMS.moving_search_width_m)
+    assert width([(25.0, 1.0 - 0.9 * gate, 1.8)]) == pytest.approx(PARAMS.moving_search_width_m)
+    assert width([(25.0 + 1.1 * gate, 1.0, 1.8), (40.0, -3.0, 1.8)]) == pytest.approx(2.5)
     off = dataclasses.replace(PARAMS, track_gate_m=0.0)
-    assert width([(25.0 + 0.9 * gate, 1.0)], off) == pytest.approx(2.5)
+    assert width([(25.0 + 0.9 * gate, 1.0, 1.8)], off) == pytest.approx(2.5)
 
 
 def test_a_target_where_a_tracked_vehicle_is_expected_is_searched_about_that_vehicle() -> None:
@@ -163,9 +163,9 @@ def test_a_target_where_a_tracked_vehicle_is_expected_is_searched_about_that_veh
     image = np.zeros((480, 640), dtype=np.uint8)
     t = target(25.0, 1.0)
     gate = PARAMS.track_gate_m
-    tracked_m = [(25.0, 1.0 - 0.9 * gate), (25.0, 1.0 + 0.95 * gate), (40.0, 1.0)]
+    tracked_m = [(25.0, 1.0 - 0.9 * gate, 1.8), (25.0, 1.0 + 0.95 * gate, 1.8), (40.0, 1.0, 1.8)]
 
-    def centre(params: VehicleParams, tracked: list[tuple[float, float]]) -> float:
+    def centre(params: VehicleParams, tracked: list[tuple[float, float, float]]) -> float:
         (a,) = search_areas(image, cam, (t,), params, 0.0, tracked, centres_y_m=(0.8,))
         return (a.y_left_m + a.y_right_m) / 2
 
@@ -276,6 +276,31 @@ def test_symmetric_box_gives_its_axis_and_width(left: int, right: int) -> None:
     axis, half_px = axes[0, AXIS] / 2, axes[0, HALF_PX]  # the axis at column a / 2
     assert abs((axis + 0.5) - (left + right) / 2) <= 1.0  # axis within 1 px
     assert abs(2 * half_px - (right - left)) <= 2.0  # width within 2 px
+
+
+def test_a_tracked_width_is_preferred_where_its_borders_pair() -> None:
+    """A vehicle's face (borders 12 px either side of column 32, on its 12 upper rows) before
+    something wider pairing on every row (20 px either side: its side and the background): the most
+    pairs are the wider ones; a preferred range about the tracked width takes the face when
+    chi reaches the threshold there, and never makes an axis qualify."""
+    patch = np.full((20, 64), 160, dtype=np.uint8)
+    patch[:, 12:52] = 100  # the wider thing, on every row
+    patch[:12, 20:44] = 40  # the face
+    edges = signed_vertical_edges(patch, PARAMS.edge_threshold)
+    pairs, n = mirrored_pairs(edges, 32)
+    chi = chi_matrix(pairs, n)
+    (wide,) = candidate_axes(chi, pairs, 5.0, 3, 5, 25)
+    assert wide[AXIS] == 63 and wide[HALF_PX] == pytest.approx(20, abs=0.5)  # column 32
+    (face,) = candidate_axes(chi, pairs, 5.0, 3, 5, 25, 0, 10, 14)
+    assert face[AXIS] == 63 and face[HALF_PX] == pytest.approx(12, abs=0.5)
+    # chi at the face (6.5) below the threshold: the wide borders stay
+    (kept,) = candidate_axes(chi, pairs, 7.0, 3, 5, 25, 0, 10, 14)
+    assert kept[HALF_PX] == pytest.approx(20, abs=0.5)
+    # too few border pairs there (26 of the face's rows against 30 needed; 40 wide): the same
+    (kept,) = candidate_axes(chi, pairs, 5.0, 3, 5, 25, 30, 10, 14)
+    assert kept[HALF_PX] == pytest.approx(20, abs=0.5)
+    # an axis that does not qualify (threshold above every chi) stays out
+    assert len(candidate_axes(chi, pairs, 50.0, 3, 5, 25, 0, 10, 14)) == 0
 
 
 def test_asymmetric_patterns_give_no_axis() -> None:
@@ -534,7 +559,7 @@ def test_a_tracked_vehicle_taller_than_its_area_is_found_in_the_taller_area() ->
     image[rows, round(319.5 - half_px) : round(319.5 + half_px)] = 30
     image = cv2.GaussianBlur(image, (5, 5), 1.0)  # a lens's blur: no pixel-sharp steps
     radar = (target(x_m, 0.0),)
-    (area,) = search_areas(image, cam, radar, PARAMS, tracked_m=[(x_m, 0.0)])
+    (area,) = search_areas(image, cam, radar, PARAMS, tracked_m=[(x_m, 0.0, math.nan)])
     assert area.tracked and area.full_px[1] > base_v - f * 1.0 / x_m  # the dark part is above
     found = detect_vehicles((area,), radar, cam, PARAMS, image=image)
     (r,) = found.targets
