@@ -259,6 +259,7 @@ def search_areas(
         )
     tracks = [tracked_vehicle(t, params, tracked_m) for t in radar]
     on_track = [None if k is None else k[0] for k in tracks]
+    track_widths_m = [math.nan if k is None else k[1] for k in tracks]
     if params.centre_on_track:
         centres_y_m = [c if y is None else y for c, y in zip(centres_y_m, on_track, strict=True)]
     moving = [moves(t, ego_speed_mps, params) for t in radar]
@@ -306,7 +307,7 @@ def search_areas(
                 moving=moving[i],
                 tracked=on_track[i] is not None,
                 too_far=width_px / widths_m[i] < params.min_image_px_per_m,
-                tracked_width_m=math.nan if tracks[i] is None else tracks[i][1],
+                tracked_width_m=track_widths_m[i],
             )
         )
     return tuple(areas)
