@@ -957,6 +957,8 @@ def detect_pedestrians(
     chosen = order[leaders]
     alternatives = [
         [int(order[j]) for j in np.flatnonzero(group == g) if j != g and passed[order[j]]]
+        if params.verify_with_hog and params.hog_alternatives
+        else []
         for g in leaders.tolist()
     ]
 

@@ -243,9 +243,9 @@ def search_areas(
     unknown: every area is `search_width_m` wide, unless tracked); tracked_m: (x_m, y_m,
     width_m) where the tracker expects the vehicles it follows on this frame, and their
     widths (`moving_search_width_m`; with `centre_on_track`, their areas are centred on
-    them); centres_y_m: the lateral centre of
-    each other target's area (`core.radar_smoothing`; None: its radar point's y_m, the
-    paper's). ValueError when centres_y_m is not one per target.
+    them); centres_y_m: the lateral centre of each other target's area
+    (`core.radar_smoothing`; None: its radar point's y_m, the paper's). ValueError when
+    centres_y_m is not one per target.
     """
     camera.check_image(image)
     if not radar:

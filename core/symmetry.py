@@ -173,6 +173,20 @@ def chi_matrix(pairs: I32Array, n: I32Array) -> F32Array:
 
 
 @_jit
+def _most_pairs(pairs: I32Array, a: int, k0: int, k1: int) -> tuple[int, int]:
+    """(k, count): the half-width row in k0 .. k1 - 1 on axis column a with the most pairs
+    summed with its two neighbours' rows (the first on ties), (-1, 0) when none has any."""
+    n_rows = pairs.shape[0]
+    best_k, best_near = -1, 0
+    for k in range(k0, k1):
+        near = pairs[k, a] + (pairs[k - 1, a] if k > 0 else 0)
+        near += pairs[k + 1, a] if k + 1 < n_rows else 0
+        if near > best_near:
+            best_k, best_near = k, near
+    return best_k, best_near
+
+
+@_jit
 def candidate_axes(
     chi: F32Array,
     pairs: I32Array,
@@ -205,25 +219,18 @@ def candidate_axes(
         for k in range(narrow_half_px - 1):
             if k < n_rows and chi[k, a] >= threshold:
                 ok = False
-        best_k, best_near = -1, 0
-        for k in range(k_min, k_max):
-            near = pairs[k, a] + (pairs[k - 1, a] if k > 0 else 0)
-            near += pairs[k + 1, a] if k + 1 < n_rows else 0
-            if near > best_near:
-                best_k, best_near = k, near
+        best_k, best_near = _most_pairs(pairs, a, k_min, k_max)
         ok = ok and best_k >= 0 and chi[best_k, a] >= threshold and best_near >= min_border_pairs
         if not ok:
             run_open = False
             continue
         # a qualified axis takes its half-width in the preferred range when one there qualifies
-        pref_k, pref_near = -1, 0
-        for k in range(max(preferred_min_half_px, 1) - 1, min(preferred_max_half_px, k_max)):
-            if k < k_min:
-                continue
-            near = pairs[k, a] + (pairs[k - 1, a] if k > 0 else 0)
-            near += pairs[k + 1, a] if k + 1 < n_rows else 0
-            if near > pref_near:
-                pref_k, pref_near = k, near
+        pref_k, pref_near = _most_pairs(
+            pairs,
+            a,
+            max(preferred_min_half_px - 1, k_min),
+            min(preferred_max_half_px, k_max),
+        )
         if pref_k >= 0 and chi[pref_k, a] >= threshold and pref_near >= min_border_pairs:
             best_k = pref_k
         if run_open and chi[best_k, a] <= found[count - 1, CHI]:

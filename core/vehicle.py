@@ -479,13 +479,14 @@ def _search_area(area: SearchArea, params: VehicleParams) -> TargetResult:
     if not (area.moving or area.tracked):
         threshold *= params.still_symmetry_factor
     base_col, base_row = area.to_patch_px(*area.base_px)  # the radar point's base
-    # the half-widths near a tracked vehicle's width, preferred (0, 0: none)
+    # the half-widths near a tracked vehicle's width, preferred (0, 0: none; candidate_axes
+    # keeps them within the vehicles' widths)
     preferred = (0, 0)
     tolerance_m, track_width_m = params.track_width_tolerance_m, area.tracked_width_m
     if tolerance_m > 0 and track_width_m > 0:  # False on NaN: not tracked
         preferred = (
-            math.ceil(max(params.min_width_m, track_width_m - tolerance_m) / 2 * area.px_per_m),
-            math.floor(min(params.max_width_m, track_width_m + tolerance_m) / 2 * area.px_per_m),
+            math.ceil((track_width_m - tolerance_m) / 2 * area.px_per_m),
+            math.floor((track_width_m + tolerance_m) / 2 * area.px_per_m),
         )
     edges, chi, found, chosen = symmetry.search(
         area.patch,

@@ -170,6 +170,11 @@ def test_a_target_where_a_tracked_vehicle_is_expected_is_searched_about_that_veh
         return (a.y_left_m + a.y_right_m) / 2
 
     assert centre(PARAMS, tracked_m) == pytest.approx(1.0 - 0.9 * gate)
+    # the area carries that vehicle's width, NaN where none is tracked
+    (a,) = search_areas(image, cam, (t,), PARAMS, 0.0, [(25.0, 1.0, 1.7)], centres_y_m=(0.8,))
+    assert a.tracked_width_m == 1.7
+    (a,) = search_areas(image, cam, (t,), PARAMS, 0.0, [], centres_y_m=(0.8,))
+    assert math.isnan(a.tracked_width_m)
     assert centre(PARAMS, tracked_m[2:]) == pytest.approx(0.8)  # none within the gate
     assert centre(dataclasses.replace(PARAMS, centre_on_track=False), tracked_m) == pytest.approx(
         0.8
@@ -280,9 +285,9 @@ def test_symmetric_box_gives_its_axis_and_width(left: int, right: int) -> None:
 
 def test_a_tracked_width_is_preferred_where_its_borders_pair() -> None:
     """A vehicle's face (borders 12 px either side of column 32, on its 12 upper rows) before
-    something wider pairing on every row (20 px either side: its side and the background): the most
-    pairs are the wider ones; a preferred range about the tracked width takes the face when
-    chi reaches the threshold there, and never makes an axis qualify."""
+    something wider pairing on every row (20 px either side: its side and the background):
+    the most pairs are the wider ones; a preferred range about the tracked width takes the
+    face when chi reaches the threshold there, and never makes an axis qualify."""
     patch = np.full((20, 64), 160, dtype=np.uint8)
     patch[:, 12:52] = 100  # the wider thing, on every row
     patch[:12, 20:44] = 40  # the face
