@@ -116,8 +116,9 @@ Notes:
       0.294 / 0.982; false boxes per frame on highway 0.002 -> 0.007 and 0.005 -> 0.005;
       nuScenes the same; aiMotive 0 -> 1 false box in 50 frames (a fence post 59 m away,
       a 17 px box); seeds 6161 + 6262 (checked afterwards): stop_and_go 0.608 / 0.995 ->
-      0.684 / 0.991, exurban 0.176 / 0.982 -> 0.225 / 0.986, highway 0 -> 0.003. The head row alone gave 0.005-0.017 of that, 2 alternatives 0.045 -
-      0.065 on stop_and_go, 5 a little more on exurban. HOG windows per frame on the
+      0.684 / 0.991, exurban 0.176 / 0.982 -> 0.225 / 0.986, highway 0 -> 0.003. The
+      head row alone gave 0.005-0.017 of that, 2 alternatives 0.045-0.065 on stop_and_go,
+      5 a little more on exurban. HOG windows per frame on the
       bundled drives 1.5 / 2.7 / 3.6 -> 1.9 / 5.0 / 5.9 (0.15 ms each).
       The stage tables count the boxes the candidates end with, so the "symmetry alone"
       figures count a passing alternative instead of the box it replaced.
