@@ -180,7 +180,7 @@ def bird_eye_geometry(
     segment_colours: list[Rgb] = []
     labels: list[tuple[float, float, float]] = []
     texts: list[str] = []
-    for track in result.tracking.confirmed:
+    for track in result.tracking.shown:
         demo = layers.confirmed and track.kind != "guard_rail"  # as the camera's confirmed
         if not (layers.coasting if track.misses else layers.tracks or demo):
             continue

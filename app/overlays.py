@@ -136,9 +136,10 @@ def _outline(
 
 
 def measured_confirmed(tracks: Sequence[Track]) -> list[Track]:
-    """The confirmed vehicle and pedestrian tracks of `tracks` measured this frame: what the
-    demo's `confirmed` layer draws and the presenter counts."""
-    return [t for t in tracks if t.confirmed and t.misses == 0 and t.kind != "guard_rail"]
+    """The shown vehicle and pedestrian tracks of `tracks` (`Track.shown`: confirmed, or a
+    vehicle's shown early) measured this frame: what the demo's `confirmed` layer draws and
+    the presenter counts."""
+    return [t for t in tracks if t.shown and t.misses == 0 and t.kind != "guard_rail"]
 
 
 def _tag(
@@ -415,8 +416,8 @@ def put_track_ids(out: RgbImage, tracks: Sequence[Track], coasting: bool = False
 def put_confirmed_tracks(out: RgbImage, tracks: Sequence[Track]) -> None:
     """In place: the box of each confirmed vehicle or pedestrian track measured this frame
     (`VEHICLE_COLOUR`, `PEDESTRIAN_COLOUR`, as `put_vehicle_boxes` and `put_pedestrians`
-    draw them), tagged with its id (`put_track_ids`); tracks missed this frame, tentative
-    ones and guard-rail tracks are not drawn.
+    draw them), tagged with its id (`put_track_ids`); tracks missed this frame, those not
+    shown (`Track.shown`) and guard-rail tracks are not drawn.
 
     tracks: e.g. `FrameResult.tracked_vehicles + FrameResult.tracked_pedestrians`.
     """

@@ -695,6 +695,11 @@ class TrackingParams:
     # a pedestrian track after this many (chosen: the HOG-verified detections are rarely
     # false; the papers' preset 3, as every kind; core/tracking.py, step 5)
     pedestrian_confirm_frames: int = 2
+    # beyond the papers: a vehicle track not yet confirmed is shown (`Track.shown`) on each
+    # frame it is measured once it has this many hits, while its life goes on as a
+    # tentative track's (chosen; 0: shown once confirmed, the papers' preset;
+    # core/tracking.py, step 5)
+    show_vehicles_after_hits: int = 2
     # a confirmed track is kept through this many consecutive missed frames (chosen)
     max_missed_frames: int = 3
     # a tentative track is kept through this many consecutive missed frames (chosen; the
@@ -765,6 +770,12 @@ class TrackingParams:
             "pedestrian_confirm_frames",
             "an integer >= 1",
             self.pedestrian_confirm_frames,
+        )
+        _check(
+            self.show_vehicles_after_hits >= 0,
+            "show_vehicles_after_hits",
+            "an integer >= 0",
+            self.show_vehicles_after_hits,
         )
         _check(
             self.max_missed_frames >= 0,

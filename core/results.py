@@ -91,7 +91,7 @@ def frame_record(result: FrameResult) -> dict[str, Any]:
                 "width_m": _number(k.width_m, 3),
                 "misses": k.misses,
             }
-            for k in result.tracking.confirmed
+            for k in result.tracking.shown
         ],
     }
 

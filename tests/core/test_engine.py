@@ -419,7 +419,7 @@ def test_fusionscope_run_writes_a_line_per_frame(tmp_path, capsys) -> None:  # t
         assert [p["verdict"] for p in record["pedestrians"]] == [
             c.verdict for c in r.pedestrian.candidates
         ]
-        assert {t["id"] for t in record["tracks"]} == {t.id for t in r.tracking.confirmed}
+        assert {t["id"] for t in record["tracks"]} == {t.id for t in r.tracking.shown}
         assert set(record["timings_ms"]) >= {"pitch", "pedestrian", "tracking", "total"}
     assert not (tmp_path / "results.jsonl.partial").exists()
 

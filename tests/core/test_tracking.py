@@ -295,6 +295,29 @@ def test_a_vehicle_seen_on_two_frames_of_three_is_confirmed_when_a_miss_is_kept(
         assert [r.ended for r in results if r.ended] == [(1,), (2,), (3,)]
 
 
+def test_a_vehicle_track_is_shown_from_its_second_hit_only_on_frames_it_is_measured() -> None:
+    assert (P.show_vehicles_after_hits, P.confirm_frames) == (2, 3)
+    seen = [True, True, False, True, True]  # hit, hit, miss, hit (the third: confirmed), hit
+    tracker, papers = Tracker(P), Tracker(dataclasses.replace(P, show_vehicles_after_hits=0))
+    shown, confirmed, ids, shown_papers = [], [], [], []
+    for hit in seen:
+        frame = [_m(20.0, 1.0)] if hit else []
+        result = tracker.update(frame, STILL, DT_S)
+        shown.append([t.id for t in result.of_kind("vehicle")])
+        confirmed.append([t.id for t in result.confirmed])
+        ids.append([t.id for t in result.tracks])
+        shown_papers.append([t.id for t in papers.update(frame, STILL, DT_S).of_kind("vehicle")])
+    assert shown == [[], [1], [], [1], [1]]  # the miss: a tentative track coasts unseen
+    assert confirmed == [[], [], [], [1], [1]]  # its life is a tentative track's
+    assert ids == [[1]] * 5
+    assert shown_papers == [[], [], [], [1], [1]]
+    # only vehicles: guard-rail labels come from confirmed tracks, people confirm on their own
+    rails = Tracker(P)
+    for _ in range(2):
+        result = rails.update([_m(20.0, -4.0, 0, "guard_rail", 0.3)], STILL, DT_S)
+    assert result.of_kind("guard_rail") == () and confirmed_sources(result, "guard_rail") == set()
+
+
 def test_two_pedestrians_crossing_keep_their_ids() -> None:
     # Same distance, opposite lateral speeds, crossing at y = 0 at t = 2.05 s (between frames).
     rng = np.random.default_rng(3)
@@ -603,6 +626,7 @@ def test_duplicate_source_index_and_unknown_kind_are_rejected() -> None:
     ("field", "value"),
     [
         ("confirm_frames", 0),
+        ("show_vehicles_after_hits", -1),
         ("max_missed_frames", -1),
         ("tentative_max_missed_frames", -1),
         ("gate_m", 0.0),
