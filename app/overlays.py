@@ -414,7 +414,7 @@ def put_track_ids(out: RgbImage, tracks: Sequence[Track], coasting: bool = False
 
 
 def put_confirmed_tracks(out: RgbImage, tracks: Sequence[Track]) -> None:
-    """In place: the box of each confirmed vehicle or pedestrian track measured this frame
+    """In place: the box of each shown vehicle or pedestrian track measured this frame
     (`VEHICLE_COLOUR`, `PEDESTRIAN_COLOUR`, as `put_vehicle_boxes` and `put_pedestrians`
     draw them), tagged with its id (`put_track_ids`); tracks missed this frame, those not
     shown (`Track.shown`) and guard-rail tracks are not drawn.
