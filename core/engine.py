@@ -163,8 +163,9 @@ class FrameResult:
     target returned (`core.track_search`); appearance: the tracked vehicles found by their
     look after both (`core.appearance`; measurements of their tracks, not detections);
     tracking: every live track after this frame; tracked_vehicles / tracked_pedestrians:
-    the confirmed tracks of each kind; tracked_guard_rails: indices of this frame's radar
-    targets labelled guard rail and associated with a confirmed guard-rail track;
+    the shown tracks of each kind (`Track.shown`); tracked_guard_rails: indices of this
+    frame's radar targets labelled guard rail and associated with a confirmed guard-rail
+    track;
     replayed: frames processed before this one to rebuild the state (0 when it followed
     the previous frame); preview: made by `preview`, from the state other parameters left;
     from_start: processed on from the drive's start (module docstring), so its tracks and
