@@ -700,6 +700,10 @@ class TrackingParams:
     # tentative track's (chosen; 0: shown once confirmed, the papers' preset;
     # core/tracking.py, step 5)
     show_vehicles_after_hits: int = 2
+    # ... but not within this distance ahead and across of a confirmed vehicle track, where
+    # it is most often a second track on that vehicle (chosen; core/tracking.py, step 5)
+    early_clearance_ahead_m: float = 4.0
+    early_clearance_across_m: float = 2.0
     # a confirmed track is kept through this many consecutive missed frames (chosen)
     max_missed_frames: int = 3
     # a tentative track is kept through this many consecutive missed frames (chosen; the
@@ -777,6 +781,9 @@ class TrackingParams:
             "an integer >= 0",
             self.show_vehicles_after_hits,
         )
+        for name in ("early_clearance_ahead_m", "early_clearance_across_m"):
+            value = getattr(self, name)
+            _check(math.isfinite(value) and value >= 0, name, "a distance >= 0", value)
         _check(
             self.max_missed_frames >= 0,
             "max_missed_frames",

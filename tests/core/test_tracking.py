@@ -318,6 +318,19 @@ def test_a_vehicle_track_is_shown_from_its_second_hit_only_on_frames_it_is_measu
     assert result.of_kind("guard_rail") == () and confirmed_sources(result, "guard_rail") == set()
 
 
+def test_an_early_track_within_the_clearance_of_a_confirmed_one_is_not_shown() -> None:
+    assert (P.early_clearance_ahead_m, P.early_clearance_across_m) == (4.0, 2.0)
+    tracker = Tracker(P)
+    for _ in range(3):
+        tracker.update([_m(20.0, 1.0)], STILL, DT_S)  # track 1, confirmed at its third hit
+    # two newcomers: 3 m ahead and 1.5 m across of track 1 (within), and 5 m across (clear)
+    shown = []
+    for _ in range(3):
+        frame = [_m(20.0, 1.0, 0), _m(23.0, 2.5, 1), _m(20.0, 6.0, 2)]
+        shown.append([t.id for t in tracker.update(frame, STILL, DT_S).of_kind("vehicle")])
+    assert shown == [[1], [1, 3], [1, 2, 3]]  # track 2 waits until it is confirmed itself
+
+
 def test_two_pedestrians_crossing_keep_their_ids() -> None:
     # Same distance, opposite lateral speeds, crossing at y = 0 at t = 2.05 s (between frames).
     rng = np.random.default_rng(3)
@@ -627,6 +640,8 @@ def test_duplicate_source_index_and_unknown_kind_are_rejected() -> None:
     [
         ("confirm_frames", 0),
         ("show_vehicles_after_hits", -1),
+        ("early_clearance_ahead_m", -1.0),
+        ("early_clearance_across_m", math.nan),
         ("max_missed_frames", -1),
         ("tentative_max_missed_frames", -1),
         ("gate_m", 0.0),
