@@ -597,6 +597,11 @@ class PedestrianParams:
     # the one-box-per-person choice left out, in its order) that passes steps 5-6; 0 keeps
     # the one box chosen (the papers' preset)
     hog_alternatives: int = 5
+    # beyond the papers (core/pedestrian.py, step 6): a box the SVM scores below its floor is
+    # scored again as a person of scan_height_m standing on its base (the symmetric area
+    # often holds only the legs), and takes that box when it reaches the floor (False: the
+    # box as found, the papers' preset)
+    hog_person_at_base: bool = True
     # beyond the papers (core/pedestrian.py, step 4): a box whose base stands off its band's
     # distance (the scan seeded it in a farther or nearer band) is kept when its height and
     # width are a person's there, ranking after the boxes that stand at their band's distance

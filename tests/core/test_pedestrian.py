@@ -25,6 +25,7 @@ from core.pedestrian import (
     PedestrianResult,
     _constraints,
     _px_per_m,
+    _verified,
     bands_for,
     detect_pedestrians,
 )
@@ -329,6 +330,36 @@ def test_a_rejected_box_gives_way_to_another_framing_the_same_person(
     calls.clear()
     alone = _detect(image, params=replace(PARAMS, hog_alternatives=0))
     assert alone.kept == () and _on(alone, truth) == ["hog"] and len(calls) == 1
+
+
+def test_a_box_of_only_the_legs_is_scored_again_as_a_person_standing_on_its_base(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    image, labels = _scene("person")
+    truth = _truth_box(labels)
+    (found,) = _detect(image).kept
+    # the symmetric area ended at the hips: the box holds the lower half of the person
+    u0, v0, u1, v1 = found.extended_box_px
+    legs = replace(found, extended_box_px=(u0, (v0 + v1) / 2, u1, v1), verdict="pedestrian")
+    (low,) = _verified(image, camera(), [legs], replace(PARAMS, hog_person_at_base=False))
+    assert low.verdict == "hog" and low.hog_score < PARAMS.hog_min_score
+    (kept,) = _verified(image, camera(), [legs], PARAMS)
+    # scored again as a person of scan_height_m (1.7 m) on its base: the 1.75 m person
+    assert kept.verdict == "pedestrian" and kept.hog_score >= PARAMS.hog_min_score
+    assert kept.height_m == PARAMS.scan_height_m and kept.extended_box_px[3] == v1
+    assert abs(kept.extended_box_px[1] - truth[1]) <= 0.05 * (truth[3] - truth[1]) + 1
+    assert iou(kept.extended_box_px, truth) >= 0.7
+    # a box already as tall as that person gets no second window
+    calls: list[list[Box]] = []
+
+    def rejecting(_: npt.NDArray[np.uint8], boxes: list[Box]) -> tuple[float, ...]:
+        calls.append(list(boxes))
+        return tuple(-5.0 for _ in boxes)
+
+    monkeypatch.setattr(hog, "people_scores", rejecting)
+    whole = replace(found, verdict="pedestrian")
+    (rejected,) = _verified(image, camera(), [whole], PARAMS)
+    assert rejected.verdict == "hog" and calls == [[found.extended_box_px]]
 
 
 def test_the_height_scale_on_the_road_follows_the_bands() -> None:
