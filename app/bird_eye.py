@@ -42,7 +42,7 @@ from app.overlays import (
     GUARD_RAIL_LINE_COLOUR,
     PEDESTRIAN_COLOUR,
     VEHICLE_COLOUR,
-    measured_confirmed,
+    measured_shown,
     radar_colour,
 )
 from app.panels import VEHICLE_FOOTPRINT_LENGTH_M, bird_eye_extent_m
@@ -170,7 +170,7 @@ def bird_eye_geometry(
     ]
     vehicles += [
         (t.x_m, t.y_m, t.width_m)
-        for t in (measured_confirmed(result.tracked_vehicles) if layers.confirmed else ())
+        for t in (measured_shown(result.tracked_vehicles) if layers.confirmed else ())
     ]
     length, height = VEHICLE_FOOTPRINT_LENGTH_M, VEHICLE_HEIGHT_M
     centres = _points([(x + length / 2, y + dy, height / 2) for x, y, _ in vehicles])

@@ -135,7 +135,7 @@ def _outline(
             cv2.rectangle(out, (c0 + k, r0 + k), (c1 - k, r1 - k), colour, 1)
 
 
-def measured_confirmed(tracks: Sequence[Track]) -> list[Track]:
+def measured_shown(tracks: Sequence[Track]) -> list[Track]:
     """The shown vehicle and pedestrian tracks of `tracks` (`Track.shown`: confirmed, or a
     vehicle's shown early) measured this frame: what the demo's `confirmed` layer draws and
     the presenter counts."""
@@ -422,7 +422,7 @@ def put_confirmed_tracks(out: RgbImage, tracks: Sequence[Track]) -> None:
     tracks: e.g. `FrameResult.tracked_vehicles + FrameResult.tracked_pedestrians`.
     """
     require_rgb_image("out", out)
-    shown = measured_confirmed(tracks)
+    shown = measured_shown(tracks)
     for t in shown:
         if t.kind == "vehicle":
             _outline(out, t.outline_px, VEHICLE_COLOUR, BOX_THICKNESS_PX)

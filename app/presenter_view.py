@@ -19,7 +19,7 @@ import numpy as np
 
 from app import draw
 from app.legend import MARGIN_PX, banner_strip
-from app.overlays import measured_confirmed
+from app.overlays import measured_shown
 from core.engine import FrameResult
 
 # The figures' strip: the counts large, the time under them
@@ -46,8 +46,8 @@ class HeadlineFigures:
 def headline_figures(result: FrameResult) -> HeadlineFigures:
     """The figures of `result`: what the demo layers draw (`app.state.DEMO_LAYERS`), the
     confirmed tracks measured this frame, never a single frame's proposals."""
-    vehicles = measured_confirmed(result.tracked_vehicles)
-    pedestrians = measured_confirmed(result.tracked_pedestrians)
+    vehicles = measured_shown(result.tracked_vehicles)
+    pedestrians = measured_shown(result.tracked_pedestrians)
     nearest = min((t.x_m for t in vehicles), default=None)
     return HeadlineFigures(len(vehicles), len(pedestrians), nearest, result.timings.total_ms)
 

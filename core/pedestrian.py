@@ -850,14 +850,11 @@ def _verified(
     out = list(candidates)
     low: list[int] = []
     for i, hog_score in zip(kept, scores, strict=True):
-        floor = _hog_floor(candidates[i], params)
-        marked = candidates[i].obstacle_fraction >= params.min_obstacle_fraction
-        verdict: Verdict = (
-            "pedestrian" if hog_score >= floor else "hog" if marked else "motion_stereo"
-        )
-        out[i] = dataclasses.replace(candidates[i], verdict=verdict, hog_score=hog_score)
-        if hog_score < floor:
+        verdict: Verdict = "pedestrian"
+        if hog_score < _hog_floor(candidates[i], params):
+            verdict = "hog" if _marked(candidates[i], params) else "motion_stereo"
             low.append(i)
+        out[i] = dataclasses.replace(candidates[i], verdict=verdict, hog_score=hog_score)
     if params.hog_person_at_base:
         tall = {i: _person_at_base(candidates[i], camera, params.scan_height_m) for i in low}
         standing = [(i, box) for i, box in tall.items() if box is not None]
@@ -874,9 +871,14 @@ def _verified(
     return out
 
 
+def _marked(candidate: PedestrianCandidate, params: PedestrianParams) -> bool:
+    """Step 5: motion stereo marked the candidate's box as obstacle."""
+    return candidate.obstacle_fraction >= params.min_obstacle_fraction
+
+
 def _hog_floor(candidate: PedestrianCandidate, params: PedestrianParams) -> float:
     """Step 6: the SVM score a box needs, by how motion stereo marked it."""
-    if candidate.obstacle_fraction >= params.min_obstacle_fraction:
+    if _marked(candidate, params):
         return params.hog_min_score
     return params.hog_without_motion_min_score
 
@@ -886,12 +888,12 @@ def _person_at_base(
 ) -> Box | None:
     """Step 6: the candidate's box with its top where a person `height_m` tall standing on its
     base (at distance_m, lateral_m) has the head; None when that is no box."""
-    u0, _, u1, v1 = candidate.extended_box_px
+    u0, v0, u1, v1 = candidate.extended_box_px
     head_px, ok = camera.project([[candidate.distance_m, candidate.lateral_m, height_m]])
     top_px = float(head_px[0, 1])
     if not (bool(ok[0]) and math.isfinite(top_px) and top_px < v1 - 1):
         return None
-    if candidate.extended_box_px[1] - top_px < SHORT_FRACTION * (v1 - top_px):
+    if v0 - top_px < SHORT_FRACTION * (v1 - top_px):
         return None  # as tall as that person already
     half_px = max(u1 - u0, PERSON_ASPECT * (v1 - top_px)) / 2
     return (candidate.axis_px - half_px, top_px, candidate.axis_px + half_px, v1)

@@ -744,8 +744,11 @@ class _TrackState:
         of floats, so a shallow copy shares nothing that the in-place steps change."""
         return copy.copy(self)
 
-    def snapshot(self, params: TrackingParams) -> Track:
-        early = params.show_vehicles_after_hits
+    def snapshot(
+        self, params: TrackingParams, confirmed_at_m: Sequence[tuple[float, float]] = ()
+    ) -> Track:
+        """This track as reported. confirmed_at_m: the positions of this frame's confirmed
+        vehicle tracks, within whose clearance a vehicle track is not shown early (step 5)."""
         return Track(
             id=self.id,
             kind=self.kind,
@@ -764,29 +767,25 @@ class _TrackState:
             source_index=self.source_index,
             history_m=self.history_m,
             unreturned=self.unreturned,
-            shown_early=not self.confirmed
-            and self.kind == "vehicle"
-            and 0 < early <= self.hits
-            and self.misses == 0,
+            shown_early=self._shown_early(params, confirmed_at_m),
         )
 
-
-def _clear_of_confirmed(tracks: tuple[Track, ...], p: TrackingParams) -> tuple[Track, ...]:
-    """Step 5: a vehicle track shown early is not shown within the clearance of a confirmed
-    vehicle track (`early_clearance_ahead_m` / `_across_m`): it is most often a second track
-    on the confirmed one's vehicle, whose box would be a false one and an id switch."""
-    held = [(t.x_m, t.y_m) for t in tracks if t.kind == "vehicle" and t.confirmed]
-
-    def crowded(t: Track) -> bool:
-        return any(
-            abs(t.x_m - x_m) < p.early_clearance_ahead_m
-            and abs(t.y_m - y_m) < p.early_clearance_across_m
-            for x_m, y_m in held
+    def _shown_early(
+        self, p: TrackingParams, confirmed_at_m: Sequence[tuple[float, float]]
+    ) -> bool:
+        """Step 5: a tentative vehicle track measured this frame with
+        `show_vehicles_after_hits` hits or more, not within `early_clearance_ahead_m` and
+        `early_clearance_across_m` of a confirmed vehicle track (there it is most often a
+        second track on that vehicle, whose box would be a false one and an id switch)."""
+        if self.confirmed or self.kind != "vehicle" or self.misses:
+            return False
+        if not 0 < p.show_vehicles_after_hits <= self.hits:
+            return False
+        return not any(
+            abs(self.x - x_m) < p.early_clearance_ahead_m
+            and abs(self.y - y_m) < p.early_clearance_across_m
+            for x_m, y_m in confirmed_at_m
         )
-
-    return tuple(
-        replace(t, shown_early=False) if t.shown_early and crowded(t) else t for t in tracks
-    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -926,5 +925,5 @@ class Tracker:
                 live.append(_TrackState(self._next_id, m, rs[j], p))
                 self._next_id += 1
         self._tracks = live  # ascending ids: survivors in order, then the newborn
-        shown = _clear_of_confirmed(tuple(t.snapshot(p) for t in live), p)
-        return TrackResult(shown, tuple(sorted(ended)))
+        held = [(t.x, t.y) for t in live if t.kind == "vehicle" and t.confirmed]
+        return TrackResult(tuple(t.snapshot(p, held) for t in live), tuple(sorted(ended)))

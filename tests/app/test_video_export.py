@@ -127,7 +127,7 @@ def test_vehicle_boxes_are_drawn_where_the_engines_result_puts_them(
     frames, _ = _decode(mp4.path)
     result = engine_result("highway", FRAME)  # what the inspector shows
     # the demo draws the confirmed vehicle tracks measured on the frame, with their bodies
-    shown = overlays.measured_confirmed(result.tracked_vehicles)
+    shown = overlays.measured_shown(result.tracked_vehicles)
     assert shown, "frame 90 of the highway has confirmed vehicles"
     for track in shown:
         box = box_pixels(track.outline_px)
