@@ -418,8 +418,11 @@ def _px_per_m(bands: Bands, row_px: IntArray) -> FloatArray:
     so the bands' figures are fitted by a line (one band: its own figure)."""
     if len(bands) == 1:
         return np.full(len(row_px), bands.px_per_m[0])
-    slope, offset = np.polyfit(bands.foot_row_px.astype(np.float64), bands.px_per_m, 1)
-    return np.maximum(slope * row_px + offset, 0.0)
+    # the least-squares line, in closed form (np.polyfit's SVD cost 0.2 ms a frame)
+    mean_row, mean_px = bands.foot_row_px.mean(), bands.px_per_m.mean()
+    centred = bands.foot_row_px - mean_row
+    slope = np.dot(centred, bands.px_per_m - mean_px) / np.dot(centred, centred)
+    return np.maximum(slope * (row_px - mean_row) + mean_px, 0.0)
 
 
 def _strip_rows(camera: CameraModel, bands: Bands, params: PedestrianParams) -> tuple[int, int]:
@@ -855,9 +858,9 @@ def _verified(
             verdict = "hog" if _marked(candidates[i], params) else "motion_stereo"
             low.append(i)
         out[i] = dataclasses.replace(candidates[i], verdict=verdict, hog_score=hog_score)
-    if params.hog_person_at_base:
-        tall = {i: _person_at_base(candidates[i], camera, params.scan_height_m) for i in low}
-        standing = [(i, box) for i, box in tall.items() if box is not None]
+    if params.hog_person_at_base and low:
+        tall = _people_at_base([candidates[i] for i in low], camera, params.scan_height_m)
+        standing = [(i, box) for i, box in zip(low, tall, strict=True) if box is not None]
         scores = hog.people_scores(image, [box for _, box in standing]) if standing else ()
         for (i, box), hog_score in zip(standing, scores, strict=True):
             if hog_score >= _hog_floor(candidates[i], params):
@@ -883,20 +886,24 @@ def _hog_floor(candidate: PedestrianCandidate, params: PedestrianParams) -> floa
     return params.hog_without_motion_min_score
 
 
-def _person_at_base(
-    candidate: PedestrianCandidate, camera: CameraModel, height_m: float
-) -> Box | None:
-    """Step 6: the candidate's box with its top where a person `height_m` tall standing on its
-    base (at distance_m, lateral_m) has the head; None when that is no box."""
-    u0, v0, u1, v1 = candidate.extended_box_px
-    head_px, ok = camera.project([[candidate.distance_m, candidate.lateral_m, height_m]])
-    top_px = float(head_px[0, 1])
-    if not (bool(ok[0]) and math.isfinite(top_px) and top_px < v1 - 1):
-        return None
-    if v0 - top_px < SHORT_FRACTION * (v1 - top_px):
-        return None  # as tall as that person already
-    half_px = max(u1 - u0, PERSON_ASPECT * (v1 - top_px)) / 2
-    return (candidate.axis_px - half_px, top_px, candidate.axis_px + half_px, v1)
+def _people_at_base(
+    candidates: Sequence[PedestrianCandidate], camera: CameraModel, height_m: float
+) -> list[Box | None]:
+    """Step 6: each candidate's box with its top where a person `height_m` tall standing on
+    its base (at distance_m, lateral_m) has the head; None when that is no box."""
+    heads = [[c.distance_m, c.lateral_m, height_m] for c in candidates]
+    head_px, ok = camera.project(heads)
+    out: list[Box | None] = []
+    for c, top_px, seen in zip(candidates, head_px[:, 1].tolist(), ok.tolist(), strict=True):
+        u0, v0, u1, v1 = c.extended_box_px
+        if not (seen and math.isfinite(top_px) and top_px < v1 - 1):
+            out.append(None)
+        elif v0 - top_px < SHORT_FRACTION * (v1 - top_px):
+            out.append(None)  # as tall as that person already
+        else:
+            half_px = max(u1 - u0, PERSON_ASPECT * (v1 - top_px)) / 2
+            out.append((c.axis_px - half_px, top_px, c.axis_px + half_px, v1))
+    return out
 
 
 def detect_pedestrians(
