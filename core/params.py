@@ -548,8 +548,10 @@ class PedestrianParams:
     border_column_fraction: float = 0.15
     # edge pixels / box pixels a candidate reaches (paper: "strong presence of edges")
     min_edge_density: float = 0.04
-    # mean of edge and grey-level symmetry (0..1) a candidate reaches
-    symmetry_threshold: float = 0.6
+    # mean of edge and grey-level symmetry (0..1) a candidate reaches (core/pedestrian.py
+    # Notes: with the SVM's verification, 0.4 lets more people reach it; the papers' preset
+    # keeps 0.6)
+    symmetry_threshold: float = 0.4
     # share of a row's edges with a mirrored partner (of opposite sign, within 1 px) for the
     # row to be symmetric
     row_symmetry_fraction: float = 0.5
