@@ -67,11 +67,11 @@ HOG_PERSON_HEIGHT = 0.80
 # four sides").
 TRAINING_PERSON_PX = 96
 # OpenCV's default descriptor (HOGDescriptor(), hog.cpp): 16x16 px blocks of 2x2 cells of
-# 8x8 px every 8 px, so 7 x 15 blocks a window; 9 unsigned orientation bins; a Gaussian
-# of sigma (16 + 16) / 8 px over each block (winSigma's default); L2-Hys clipped at 0.2.
+# 8x8 px every cell (7 x 15 blocks in a 64x128 window); 9 unsigned orientation bins; a
+# Gaussian of sigma (16 + 16) / 8 px over each block (winSigma's default); L2-Hys clipped
+# at 0.2.
 CELL_PX = 8
 BLOCK_PX = 16
-BLOCKS = (7, 15)
 BINS = 9
 BLOCK_SIGMA_PX = 4.0
 L2HYS_CLIP = 0.2
@@ -183,13 +183,13 @@ def _window_score(
     weights: npt.NDArray[np.float32],
     bias: float,
 ) -> float:
-    """The SVM's decision value of one 128x64 window (the module Notes): per row, each
+    """The SVM's decision value of one (128, 64) window (the module Notes): per row, each
     pixel's two orientation shares weighted along x into the cells of the two blocks it
     lies in; per block, the rows weighted along y into its 2x2 cells, L2-Hys normalised
     and dotted with the block's weights (block-major across, then down; cells across,
     then down; then bins, as OpenCV orders the descriptor)."""
     rows, cols = window.shape
-    across, down = BLOCKS
+    across, down = (cols - BLOCK_PX) // CELL_PX + 1, (rows - BLOCK_PX) // CELL_PX + 1
     width = 2 * BINS
     grey = np.empty((3, cols), dtype=np.float32)  # the rows above, at and below, cyclically
     for x in range(cols):

@@ -8,6 +8,7 @@ box, and the camera gives where a box's base meets the road.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 from functools import cache
 
@@ -304,6 +305,21 @@ def test_the_hog_verification_keeps_a_person_and_says_why_it_drops_a_box() -> No
     assert rejected and all(math.isnan(c.hog_score) for c in rejected)
 
 
+def _scripted_svm(
+    monkeypatch: pytest.MonkeyPatch, score: Callable[[int], float]
+) -> list[list[Box]]:
+    """Replace the SVM by one scoring every box of its n-th call (from 1) score(n); the
+    boxes of each call are appended to the list returned."""
+    calls: list[list[Box]] = []
+
+    def scripted(_: npt.NDArray[np.uint8], boxes: list[Box]) -> tuple[float, ...]:
+        calls.append(list(boxes))
+        return tuple(score(len(calls)) for _ in boxes)
+
+    monkeypatch.setattr(hog, "people_scores", scripted)
+    return calls
+
+
 def test_a_rejected_box_gives_way_to_another_framing_the_same_person(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -311,13 +327,7 @@ def test_a_rejected_box_gives_way_to_another_framing_the_same_person(
     truth = _truth_box(labels)
     (chosen,) = _detect(image).kept
     # an SVM that rejects every box it sees first (the chosen ones) and keeps the others
-    calls: list[list[Box]] = []
-
-    def first_rejected(_: npt.NDArray[np.uint8], boxes: list[Box]) -> tuple[float, ...]:
-        calls.append(list(boxes))
-        return tuple(-5.0 if len(calls) == 1 else 5.0 for _ in boxes)
-
-    monkeypatch.setattr(hog, "people_scores", first_rejected)
+    calls = _scripted_svm(monkeypatch, lambda call: -5.0 if call == 1 else 5.0)
     result = _detect(image)
     (kept,) = result.kept
     assert calls[0] == [chosen.extended_box_px]  # the chosen box first, then another
@@ -350,13 +360,7 @@ def test_a_box_of_only_the_legs_is_scored_again_as_a_person_standing_on_its_base
     assert abs(kept.extended_box_px[1] - truth[1]) <= 0.05 * (truth[3] - truth[1]) + 1
     assert iou(kept.extended_box_px, truth) >= 0.7
     # a box already as tall as that person gets no second window
-    calls: list[list[Box]] = []
-
-    def rejecting(_: npt.NDArray[np.uint8], boxes: list[Box]) -> tuple[float, ...]:
-        calls.append(list(boxes))
-        return tuple(-5.0 for _ in boxes)
-
-    monkeypatch.setattr(hog, "people_scores", rejecting)
+    calls = _scripted_svm(monkeypatch, lambda _: -5.0)
     whole = replace(found, verdict="pedestrian")
     (rejected,) = _verified(image, camera(), [whole], PARAMS)
     assert rejected.verdict == "hog" and calls == [[found.extended_box_px]]
