@@ -2,7 +2,8 @@
 
 `as_json` holds every figure: {"recordings": [{"name": ..., <figures>}], "total": {<figures>}}
 with <figures> = {"frames", "vehicles": {"frames": {rd, fn, rfn, fp, nvo, framed, the
-shares, supplied_refined_share_by_class (RD / (RD + FN) per car, van, truck), and where
+shares, supplied_refined_share_by_class (RD / (RD + FN) per car, van, truck),
+supplied_refined_share_within_50_m (RD / (RD + FN) of those within 50 m), and where
 each FN, RFN, FP, NVO happened as [frame, id] pairs}, "events": {events, radar_miss,
 not_refined, refined, refined_share, refined_share_of_radar_supplied}}, "guardrails",
 "pedestrians" (per filter: symmetry, motion_stereo, vehicles, radar), "motion_stereo", "pitch",
@@ -35,7 +36,7 @@ from .evaluate import (
 )
 from .mot import MotScore
 from .objects import BoxScore, MaskScore, PitchScore, RailScore
-from .vehicles import VEHICLE_CLASSES, EventStats, FrameStats
+from .vehicles import SUPPLIED_NEAR_M, VEHICLE_CLASSES, EventStats, FrameStats
 
 TIMING_TITLE = "Guard rails: execution time per frame, ms, one thread (paper 002, table I)"
 BASELINE_TIMING_TITLE = "Baselines: ms per frame (median, one thread, the same frames)"
@@ -107,6 +108,9 @@ def _frames_json(s: FrameStats, listings: bool) -> dict[str, Any]:
         "supplied_refined_share_by_class": {
             c: _share(s.supplied_refined_share(c)) for c in VEHICLE_CLASSES
         },
+        f"supplied_refined_share_within_{SUPPLIED_NEAR_M:g}_m": _share(
+            s.supplied_refined_share_near
+        ),
     }
     if listings:
         out |= {
@@ -365,6 +369,7 @@ def tables(
                 f"RD box IoU >= {IOU_GOOD:g}",
                 "distance error m: median / p90 of size",
                 "RD / (RD + FN): " + " / ".join(VEHICLE_CLASSES),
+                f"RD / (RD + FN) within {SUPPLIED_NEAR_M:g} m",
             ),
             tuple(
                 (
@@ -380,6 +385,7 @@ def tables(
                     _percent(r.vehicles.rd_iou_share(IOU_GOOD)),
                     _distance_errors(r.vehicles),
                     _by_class(r.vehicles),
+                    _fixed(r.vehicles.supplied_refined_share_near),
                 )
                 for r in rows
             ),

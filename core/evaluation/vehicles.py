@@ -55,7 +55,8 @@ Notes:
 
 Beyond the paper, RD / (RD + FN) per class (`FrameStats.supplied_refined_share`): for the
 framed cars, vans and trucks apart, the share of those radar supplied to vision that
-vision refined (RFN left out).
+vision refined (RFN left out); and the same share for the framed vehicles within
+SUPPLIED_NEAR_M (`FrameStats.supplied_refined_share_near`), those a driver must not miss.
 
 Beyond the paper, the distance error: for each framed vehicle that an estimate finds across
 (lateral position and width within `refined_error_m`) less than DISTANCE_MATCH_M off in
@@ -85,6 +86,7 @@ MAX_DISTANCE_M = 60.0  # beyond this no vehicle is framed
 ON_VEHICLE_MARGIN_M = 0.5  # a radar point this close to a vehicle's footprint lies on it
 EVENT_MIN_FRAMES = 10  # an event is a vehicle framed in more than this many frames
 DISTANCE_MATCH_M = 5.0  # an estimate found across this near in distance measures the error
+SUPPLIED_NEAR_M = 50.0  # RD / (RD + FN) is also given for the framed vehicles this near
 
 VehicleVerdict = Literal["rd", "fn", "rfn"]
 ObstacleVerdict = Literal["fp", "nvo"]
@@ -123,7 +125,8 @@ class FrameVehicles:
     verdict) per supplied target on no vehicle; rd_iou: for each RD vehicle in order, the
     IoU of its true image box with the best box of the estimates that refine it (NaN when
     none has a box); distance_error_m: the distance errors of the framed vehicles found
-    across (module docstring); classes: each framed vehicle's class, in `vehicles`' order."""
+    across (module docstring); classes, distances_m: each framed vehicle's class and the
+    distance of its near face, in `vehicles`' order."""
 
     index: int
     vehicles: tuple[tuple[int, VehicleVerdict], ...]
@@ -131,6 +134,7 @@ class FrameVehicles:
     rd_iou: tuple[float, ...] = ()
     distance_error_m: tuple[float, ...] = ()
     classes: tuple[str, ...] = ()
+    distances_m: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -154,6 +158,8 @@ class FrameStats:
     distance_error_m: tuple[float, ...] = ()
     # (class, verdict) of every framed vehicle on every frame
     class_verdicts: tuple[tuple[str, VehicleVerdict], ...] = ()
+    # the verdict of every framed vehicle within SUPPLIED_NEAR_M on every frame
+    near_verdicts: tuple[VehicleVerdict, ...] = ()
 
     @property
     def framed(self) -> int:
@@ -188,6 +194,12 @@ class FrameStats:
         supplied to vision that vision refined (NaN without one)."""
         rd = sum(c == cls and v == "rd" for c, v in self.class_verdicts)
         fn = sum(c == cls and v == "fn" for c, v in self.class_verdicts)
+        return rd / (rd + fn) if rd + fn else math.nan
+
+    @property
+    def supplied_refined_share_near(self) -> float:
+        """RD / (RD + FN) of the framed vehicles within SUPPLIED_NEAR_M (NaN without one)."""
+        rd, fn = self.near_verdicts.count("rd"), self.near_verdicts.count("fn")
         return rd / (rd + fn) if rd + fn else math.nan
 
     def __add__(self, other: FrameStats) -> FrameStats:
@@ -287,6 +299,7 @@ def score_frame(
     the search areas built for them, and the estimates to score."""
     vehicles: list[tuple[int, VehicleVerdict]] = []
     classes: list[str] = []
+    distances_m: list[float] = []
     rd_iou: list[float] = []
     distance_error_m: list[float] = []
     for o in objects:
@@ -304,6 +317,7 @@ def score_frame(
             verdict = "fn"
         vehicles.append((o.id, verdict))
         classes.append(o.cls)
+        distances_m.append(o.position_m[0])
     all_vehicles = [o for o in objects if o.cls in VEHICLE_CLASSES]
 
     def on_a_vehicle(x_m: float, y_m: float) -> bool:
@@ -330,6 +344,7 @@ def score_frame(
         tuple(rd_iou),
         tuple(distance_error_m),
         tuple(classes),
+        tuple(distances_m),
     )
 
 
@@ -358,6 +373,13 @@ def frame_stats(frames: Sequence[FrameVehicles]) -> FrameStats:
             for f in frames
             if f.classes
             for c, (_, v) in zip(f.classes, f.vehicles, strict=True)
+        ),
+        near_verdicts=tuple(
+            v
+            for f in frames
+            if f.distances_m
+            for d, (_, v) in zip(f.distances_m, f.vehicles, strict=True)
+            if d <= SUPPLIED_NEAR_M
         ),
     )
 

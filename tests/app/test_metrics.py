@@ -85,9 +85,9 @@ def test_the_markdown_holds_the_vehicle_table_of_the_drive_without_listings() ->
     )
     text = metrics_markdown(r)
     assert text.startswith("**Vehicles, frame by frame (paper 001, section III)**\n")
-    # framed = RD + FN + RFN = 10; shares of it; no box IoU, distance error or class in
-    # this made-up report
-    row = "| drive | 20 | 10 | 6 (60%) | 3 (30%) | 1 (10%) | 2 | 4 | - | - | - | - / - / - |"
+    # framed = RD + FN + RFN = 10; shares of it; no box IoU, distance error, class or
+    # distance of a vehicle in this made-up report
+    row = "| drive | 20 | 10 | 6 (60%) | 3 (30%) | 1 (10%) | 2 | 4 | - | - | - | - / - / - | - |"
     assert row in text.splitlines()
     assert "**Guard rails (paper 002): slow radar targets (-: no guard-rail truth)**" in text
     assert "Where the errors are" not in metrics_markdown(errors())

@@ -29,6 +29,7 @@ from core.evaluation.report import BASELINE_TIMING_TITLE, TIMED_TITLES
 from core.evaluation.vehicles import (
     DISTANCE_MATCH_M,
     EVENT_MIN_FRAMES,
+    SUPPLIED_NEAR_M,
     Estimate,
     FrameVehicles,
     event_stats,
@@ -167,6 +168,26 @@ def test_rd_over_rd_and_fn_by_class() -> None:
     assert math.isnan(s.supplied_refined_share("truck")) and s.rfn == 4
     assert report._by_class(s) == "0.75 / 0.25 / -"
     assert (s + s).supplied_refined_share("van") == 0.25  # drives add up
+
+
+def test_rd_over_rd_and_fn_within_50_m() -> None:
+    """Cars at 20, 45 and 55 m, each supplied to vision (in an area): refined at 20 and 55 m,
+    not at 45 m. Within SUPPLIED_NEAR_M the share is 1 of 2; the 55 m car counts in the
+    overall figure only."""
+    distances = (20.0, 45.0, 55.0)
+    objects = [car(k + 1, x, 0.0 if k == 0 else 4.0 * k) for k, x in enumerate(distances)]
+    radar = [target(o.position_m[0], o.position_m[1]) for o in objects]
+    estimates = [
+        Estimate(x, y, 1.8, (k,))
+        for k, (x, y, _) in enumerate(o.position_m for o in objects)
+        if k != 1
+    ]
+    areas = [area(k, t) for k, t in enumerate(radar)]
+    s = frame_stats([score_frame(0, objects, radar, areas, estimates, TOLERANCE_M)])
+    assert (s.rd, s.fn, s.rfn) == (2, 1, 0) and SUPPLIED_NEAR_M == 50.0
+    assert s.supplied_refined_share_near == 0.5
+    assert (s + s).supplied_refined_share_near == 0.5  # drives add up
+    assert math.isnan(frame_stats([]).supplied_refined_share_near)
 
 
 def test_refined_needs_distance_lateral_and_width_each_within_the_tolerance() -> None:
