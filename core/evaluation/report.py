@@ -656,6 +656,10 @@ def _vehicle_mota(r: RecordingReport) -> str:
 # The headline figures `evaluate --compare` sets side by side: (name, figure of a report).
 HEADLINE_FIGURES: tuple[tuple[str, Callable[[RecordingReport], str]], ...] = (
     ("vehicles RD / (RD + FN)", _refined_of_supplied),
+    (
+        f"vehicles RD / (RD + FN) within {SUPPLIED_NEAR_M:g} m",
+        lambda r: _fixed(r.vehicles.supplied_refined_share_near),
+    ),
     ("vehicles RFN / framed", _rfn_of_framed),
     ("vehicle FP per frame", _fp_per_frame),
     ("vehicles RD box IoU median", lambda r: _fixed(r.vehicles.rd_iou_median)),
