@@ -217,12 +217,11 @@ Notes:
       0.978 and 0.998 -> 0.994, highway 0.010 false boxes per frame both; tracked recall
       exurban 0.283 -> 0.280 (precision 0.909 -> 0.889), stop_and_go 0.758 -> 0.779,
       pedestrian MOTA +0.004 and +0.010: the gain holds there, smaller on exurban. 0.5 gained
-      about a third of that, 0.35
-      a little more than 0.4 for more windows; `max_candidates` 40 changed nothing. Cost: the
-      SVM's windows per frame on the bundled drives 3.0 / 6.5 / 8.2 -> 5.0 / 10.4 / 14.3
-      (highway / exurban / stop_and_go), the whole frame about +6 % on highway and +9 % on
-      stop_and_go (paired runs, 2026-12-03), the compiled descriptor (`core.hog`) already
-      counted: it takes back part of that.
+      about a third of that, 0.35 a little more than 0.4 for more windows; `max_candidates`
+      40 changed nothing. Cost: the SVM's windows per frame on the bundled drives 3.0 / 6.5
+      / 8.2 -> 5.0 / 10.4 / 14.3 (highway / exurban / stop_and_go), the whole frame about +6
+      % on highway and +9 % on stop_and_go (paired runs, 2026-12-03), the compiled
+      descriptor (`core.hog`) already counted: it takes back part of that.
 """
 
 from __future__ import annotations
