@@ -1,7 +1,10 @@
 """The inspector's web server: one viser server, a session per client, a render worker per drive.
 
-    serve(recordings_root, recording, host, port, presets)   # `fusionscope serve`, until Ctrl-C
+    serve(recordings_root, recording, host, port, presets, access=Access(new_token()))
     server = InspectorServer(root, None, "127.0.0.1", 0, presets=folder); server.start(); ...
+
+Every request passes `app.access` first: pages of other sites, Host names that are not this
+server's, and (with a token) requests without the token are refused.
 
 Only recordings listed by `app.catalog` under the recordings root are opened. A recording
 that cannot be opened is reported on the page of the client that asked for it; the server
@@ -10,7 +13,9 @@ stays up.
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import io
 import logging
 import threading
 import time
@@ -20,6 +25,7 @@ from pathlib import Path
 
 import viser
 
+from app.access import NO_TOKEN, Access, guarding, page_address
 from app.catalog import list_recordings, resolve_recording
 from app.clip_export import export_clip
 from app.engines import ClientEngines
@@ -71,6 +77,7 @@ class InspectorServer:
 
     `recording` names the recording new clients see first (default: the first by name);
     `presets` is the folder parameter presets are saved in (the only place it writes);
+    `access`: what a request must show (`app.access`; the default needs no token);
     `present`: every tab shows the presenter view and cannot leave it (`fusionscope serve
     --present`). A tab opened with a view link (`app.view_link`) in its URL shows that view.
     Raises ValueError when the root is not a folder or `recording` is not under it.
@@ -86,6 +93,7 @@ class InspectorServer:
         *,
         presets: Path,
         present: bool = False,
+        access: Access = NO_TOKEN,
     ) -> None:
         self.recordings_root = Path(recordings_root).resolve()
         self.recordings = list_recordings(self.recordings_root)
@@ -97,6 +105,7 @@ class InspectorServer:
         self._open_drive = open_drive
         self.presets = PresetStore(presets)
         self.present = present
+        self.access = access
         self._drives: dict[str, _OpenDrive] = {}
         self._sessions: dict[int, Session] = {}
         self._lock = threading.Lock()
@@ -111,7 +120,17 @@ class InspectorServer:
 
     def start(self) -> int:
         """Start serving in background threads; returns the bound port."""
-        server = viser.ViserServer(host=self.host, port=self.requested_port, verbose=False)
+        # viser's banner gives the address without the token, which is refused: `serve`
+        # prints the one to open
+        with guarding(self.access) as guard, contextlib.redirect_stdout(io.StringIO()):
+            server = viser.ViserServer(host=self.host, port=self.requested_port, verbose=False)
+        if not guard.used:
+            server.stop()
+            raise RuntimeError(
+                f"viser {viser.__version__} did not start its web server through "
+                "websockets.asyncio.server.serve: the inspector's access checks (app.access) "
+                "cannot be installed, so it does not serve"
+            )
         server.gui.configure_theme(control_width="large", show_logo=False, show_share_button=False)
         server.gui.set_panel_label("fusionscope")
         server.on_client_connect(self._connect)
@@ -379,14 +398,16 @@ def serve(
     port: int,
     presets: Path,
     present: bool = False,
+    access: Access = NO_TOKEN,
 ) -> None:
     """Run the inspector until Ctrl-C; presets are saved in the folder `presets`; `present`:
-    every tab is a presenter view."""
+    every tab is a presenter view; `access`: what a request must show (`app.access`)."""
     inspector = InspectorServer(
-        recordings_root, recording, host, port, presets=presets, present=present
+        recordings_root, recording, host, port, presets=presets, present=present, access=access
     )
     bound = inspector.start()
-    print(f"fusionscope inspector: http://{host}:{bound}  (Ctrl-C to stop)")
+    address = page_address(host, bound, access)
+    print(f"fusionscope inspector: {address}  (Ctrl-C to stop)", flush=True)
     try:
         while True:
             time.sleep(1.0)

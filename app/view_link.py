@@ -21,6 +21,7 @@ from dataclasses import dataclass, field, fields
 from typing import TypeVar
 from urllib.parse import parse_qsl, urlencode
 
+from app.access import TOKEN_KEY
 from app.param_sets import changed_names
 from app.state import STAGES, Layers, Panels
 from core.params import Params, ParamsError
@@ -84,7 +85,7 @@ def parse_link_query(query: str) -> tuple[ViewLink, tuple[str, ...]]:
                 problems.append(f"{key}: expected a number, true/false or a list, got {value!r}")
         elif key in KEYS:
             values[key] = value
-        else:
+        elif key != TOKEN_KEY:  # the server's access token (app.access), checked before this
             problems.append(f"{key}: not a part of a view (expected one of {', '.join(KEYS)})")
     panels = None
     if "panels" in values or "stage" in values:

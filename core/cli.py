@@ -892,6 +892,7 @@ DEFAULT_PRESETS = (
 
 
 def _cmd_serve(args: argparse.Namespace) -> int:
+    from app.access import Access, new_token
     from app.server import serve
     from core.io.manifest import MANIFEST_NAME
     from core.malloc import keep_freed_memory
@@ -909,17 +910,25 @@ def _cmd_serve(args: argparse.Namespace) -> int:
         )
         return 2
     if args.host not in LOOPBACK_HOSTS:
+        who = (
+            "anyone who can reach this port"
+            if args.no_token
+            else "anyone who has the printed URL (its token travels unencrypted over http)"
+        )
         print(
             f"fusionscope serve: warning: --host {args.host} lets other machines reach the "
-            "inspector, and viser has no authentication: anyone who can reach this port can "
-            "see the recordings and change the parameters",
+            f"inspector: {who} can see the recordings and change the parameters",
             file=sys.stderr,
         )
+    access = Access(
+        token=None if args.no_token else new_token(),
+        allowed_hosts=frozenset(name.lower() for name in [args.host, *args.allow_host]),
+    )
     try:
         recording = args.recording
         if recording is None and (root / DEFAULT_RECORDING / MANIFEST_NAME).is_file():
             recording = DEFAULT_RECORDING
-        serve(root, recording, args.host, args.port, Path(args.presets), args.present)
+        serve(root, recording, args.host, args.port, Path(args.presets), args.present, access)
     except ValueError as err:
         print(f"fusionscope serve: {err}", file=sys.stderr)
         return 2
@@ -1086,6 +1095,20 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="every tab shows the presenter view (a demo: pictures, legend, figures, no "
         "controls) and cannot leave it",
+    )
+    serve.add_argument(
+        "--no-token",
+        action="store_true",
+        help="serve without a token: any program on a machine that reaches the port may use "
+        "the inspector (pages of other sites are still refused)",
+    )
+    serve.add_argument(
+        "--allow-host",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="a host name the browser may reach the inspector by, besides IP addresses, "
+        "localhost and --host (repeatable; other names are refused against DNS rebinding)",
     )
     serve.set_defaults(func=_cmd_serve)
 

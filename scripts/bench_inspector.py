@@ -336,7 +336,7 @@ class Server:
 
     def __init__(self, recordings: Path, recording: str, port: int) -> None:
         self.port = port
-        self.url = f"http://127.0.0.1:{port}/"
+        self.url = ""  # the address `serve` prints (with its token), read by wait_until_answering
         self._log: IO[bytes] = tempfile.TemporaryFile()
         args = ["serve", "--recordings", str(recordings), "--recording", recording]
         self.process = subprocess.Popen(
@@ -366,18 +366,26 @@ class Server:
                     f"fusionscope serve ended with code {self.process.returncode}:\n"
                     + self.log_tail()
                 )
+            self.url = self.url or self._printed_url()
             try:
-                with urllib.request.urlopen(self.url, timeout=1.0) as reply:
-                    if reply.status == 200:
-                        return
+                if self.url:
+                    with urllib.request.urlopen(self.url, timeout=1.0) as reply:
+                        if reply.status == 200:
+                            return
             except (urllib.error.URLError, OSError):
                 pass
             if time.monotonic() > deadline:
                 raise RuntimeError(
-                    f"fusionscope serve did not answer on {self.url} within {timeout_s:.0f} s:\n"
-                    + self.log_tail()
+                    f"fusionscope serve did not answer on port {self.port} within "
+                    f"{timeout_s:.0f} s:\n" + self.log_tail()
                 )
             time.sleep(0.2)
+
+    def _printed_url(self) -> str:
+        """The address in the line `fusionscope serve` prints when it is up; "" before."""
+        self._log.seek(0)
+        found = re.search(rb"fusionscope inspector: (\S+)", self._log.read())
+        return found.group(1).decode() if found else ""
 
     def stop(self) -> None:
         """SIGINT (the server's own clean stop), SIGKILL if it lingers; then SIGKILL to any

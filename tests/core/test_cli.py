@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pytest
 
+from app.access import Access
 from core.cli import build_parser, main
 
 
@@ -44,14 +45,35 @@ def test_serve_opens_highway_first_when_the_folder_holds_it_else_the_first_by_na
     assert opened == [first]
 
 
-def test_serve_warns_that_another_host_has_no_authentication(
+@pytest.mark.parametrize("no_token", [False, True])
+def test_serve_makes_a_token_per_run_unless_told_not_and_answers_to_its_host_names(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, no_token: bool
+) -> None:
+    (tmp_path / "a").mkdir()
+    (tmp_path / "a" / "recording.yaml").write_text("format_version: 1\n")
+    accesses: list[Access] = []
+    monkeypatch.setattr("app.server.serve", lambda *args: accesses.append(args[-1]))
+    args = ["serve", "--recordings", str(tmp_path), "--allow-host", "Box.lan"]
+    for _ in range(2):
+        assert main([*args, *(["--no-token"] if no_token else [])]) == 0
+    if no_token:
+        assert [access.token for access in accesses] == [None, None]
+    else:
+        assert all(access.token for access in accesses)
+        assert accesses[0].token != accesses[1].token
+    assert accesses[0].allowed_hosts == {"127.0.0.1", "box.lan"}
+
+
+def test_serve_warns_that_another_host_reaches_it_and_who_can_use_it(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     # a recording that is not there ends the command before anything binds
     args = ["serve", "--recordings", str(tmp_path), "--recording", "nope", "--host", "0.0.0.0"]
     assert main(args) == 2
     err = capsys.readouterr().err
-    assert "warning: --host 0.0.0.0" in err and "no authentication" in err
+    assert "warning: --host 0.0.0.0" in err and "anyone who has the printed URL" in err
+    assert main([*args, "--no-token"]) == 2
+    assert "anyone who can reach this port" in capsys.readouterr().err
     assert main(["serve", "--recordings", str(tmp_path), "--recording", "nope"]) == 2
     assert "warning" not in capsys.readouterr().err
 
