@@ -35,6 +35,7 @@ from app.presenter import PresenterSession
 from app.presets import PresetStore
 from app.session import ClientSession
 from app.state import ViewState
+from app.upload_limit import DEFAULT_MAX_UPLOAD_BYTES, limit_uploads
 from app.view import CanSeries, FrameSource, FrameView, can_series, render_view
 from app.view_link import Clip, ViewLink, link_query, parse_link_query
 from app.worker import RenderWorker
@@ -78,6 +79,7 @@ class InspectorServer:
     `recording` names the recording new clients see first (default: the first by name);
     `presets` is the folder parameter presets are saved in (the only place it writes);
     `access`: what a request must show (`app.access`; the default needs no token);
+    `max_upload_bytes`: larger uploads are refused before they are kept (`app.upload_limit`);
     `present`: every tab shows the presenter view and cannot leave it (`fusionscope serve
     --present`). A tab opened with a view link (`app.view_link`) in its URL shows that view.
     Raises ValueError when the root is not a folder or `recording` is not under it.
@@ -94,6 +96,7 @@ class InspectorServer:
         presets: Path,
         present: bool = False,
         access: Access = NO_TOKEN,
+        max_upload_bytes: int = DEFAULT_MAX_UPLOAD_BYTES,
     ) -> None:
         self.recordings_root = Path(recordings_root).resolve()
         self.recordings = list_recordings(self.recordings_root)
@@ -106,6 +109,7 @@ class InspectorServer:
         self.presets = PresetStore(presets)
         self.present = present
         self.access = access
+        self.max_upload_bytes = max_upload_bytes
         self._drives: dict[str, _OpenDrive] = {}
         self._sessions: dict[int, Session] = {}
         self._lock = threading.Lock()
@@ -131,6 +135,7 @@ class InspectorServer:
                 "websockets.asyncio.server.serve: the inspector's access checks (app.access) "
                 "cannot be installed, so it does not serve"
             )
+        limit_uploads(server.gui, self.max_upload_bytes, self._upload_refused)
         server.gui.configure_theme(control_width="large", show_logo=False, show_share_button=False)
         server.gui.set_panel_label("fusionscope")
         server.on_client_connect(self._connect)
@@ -138,6 +143,11 @@ class InspectorServer:
         self._server = server
         threading.Thread(target=self._warm_up, name="warm-up", daemon=True).start()
         return server.get_port()
+
+    def _upload_refused(self, client_id: int, why: str) -> None:
+        client = self._server.get_clients().get(client_id) if self._server else None
+        if client is not None:
+            client.add_notification("Upload refused", why, color="red")
 
     def _warm_up(self) -> None:
         """Open the first recording and run the engine on its first frames, so the first
@@ -172,6 +182,7 @@ class InspectorServer:
     # --- clients ------------------------------------------------------------------------
     def _connect(self, client: viser.ClientHandle) -> None:
         """A new tab: the view its URL carries (read from the page), else a new one."""
+        limit_uploads(client.gui, self.max_upload_bytes, self._upload_refused)
         try:
             query = read_page(client, "location.search")
         except (TimeoutError, RuntimeError):
@@ -399,11 +410,20 @@ def serve(
     presets: Path,
     present: bool = False,
     access: Access = NO_TOKEN,
+    max_upload_bytes: int = DEFAULT_MAX_UPLOAD_BYTES,
 ) -> None:
     """Run the inspector until Ctrl-C; presets are saved in the folder `presets`; `present`:
-    every tab is a presenter view; `access`: what a request must show (`app.access`)."""
+    every tab is a presenter view; `access`: what a request must show (`app.access`);
+    `max_upload_bytes`: the largest upload taken (`app.upload_limit`)."""
     inspector = InspectorServer(
-        recordings_root, recording, host, port, presets=presets, present=present, access=access
+        recordings_root,
+        recording,
+        host,
+        port,
+        presets=presets,
+        present=present,
+        access=access,
+        max_upload_bytes=max_upload_bytes,
     )
     bound = inspector.start()
     address = page_address(host, bound, access)

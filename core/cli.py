@@ -928,7 +928,19 @@ def _cmd_serve(args: argparse.Namespace) -> int:
         recording = args.recording
         if recording is None and (root / DEFAULT_RECORDING / MANIFEST_NAME).is_file():
             recording = DEFAULT_RECORDING
-        serve(root, recording, args.host, args.port, Path(args.presets), args.present, access)
+        max_upload_bytes = round(args.max_upload_mb * 2**20)
+        if max_upload_bytes <= 0:
+            raise ValueError(f"--max-upload-mb: expected a positive size, got {args.max_upload_mb}")
+        serve(
+            root,
+            recording,
+            args.host,
+            args.port,
+            Path(args.presets),
+            args.present,
+            access,
+            max_upload_bytes,
+        )
     except ValueError as err:
         print(f"fusionscope serve: {err}", file=sys.stderr)
         return 2
@@ -1109,6 +1121,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME",
         help="a host name the browser may reach the inspector by, besides IP addresses, "
         "localhost and --host (repeatable; other names are refused against DNS rebinding)",
+    )
+    serve.add_argument(
+        "--max-upload-mb",
+        type=float,
+        default=64.0,
+        metavar="MB",
+        help="larger uploads (annotation files) are refused before they are kept (default: 64)",
     )
     serve.set_defaults(func=_cmd_serve)
 

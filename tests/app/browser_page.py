@@ -22,6 +22,7 @@ from playwright.sync_api import Locator, Page
 
 from app.draw import STRIP_HEIGHT_PX
 from app.server import DriveOpener, InspectorServer, open_drive
+from app.upload_limit import DEFAULT_MAX_UPLOAD_BYTES
 from app.view import PREVIEW_NOTE, SETTLING_NOTE, STAGE_GAP_PX
 from core.io.drive import Drive
 
@@ -58,10 +59,18 @@ def start(
     recording: str | None = None,
     opener: DriveOpener = open_drive,
     present: bool = False,
+    max_upload_bytes: int = DEFAULT_MAX_UPLOAD_BYTES,
 ) -> InspectorServer:
     presets = Path(tempfile.mkdtemp(prefix="fusionscope-presets-"))
     server = InspectorServer(
-        root, recording, "127.0.0.1", 0, open_drive=opener, presets=presets, present=present
+        root,
+        recording,
+        "127.0.0.1",
+        0,
+        open_drive=opener,
+        presets=presets,
+        present=present,
+        max_upload_bytes=max_upload_bytes,
     )
     server.start()
     return server
@@ -76,11 +85,12 @@ def serving(
     *,
     present: bool = False,
     query: str = "",
+    max_upload_bytes: int = DEFAULT_MAX_UPLOAD_BYTES,
 ) -> Iterator[InspectorServer]:
     """An inspector on `root` (`present`: a presenter-only one), opened in `page` at the URL
     query `query`; on leaving, the page is saved to SCREENSHOTS/<test>.png while the server
     still runs, then the server stops."""
-    server = start(root, recording, opener, present)
+    server = start(root, recording, opener, present, max_upload_bytes)
     try:
         page.goto(f"http://127.0.0.1:{server.port}/{query}")
         yield server

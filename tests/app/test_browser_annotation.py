@@ -205,6 +205,25 @@ def test_accept_an_engine_track_download_and_import_a_file(
         assert len(tracks) == 2 and [k["frame"] for k in tracks[1]["keyframes"]] == [55]
 
 
+def test_a_file_over_the_upload_limit_is_refused_and_the_annotations_stay(
+    unannotated: Path, page: Page
+) -> None:
+    limit_bytes = 2_000
+    truth = unannotated / "exurban" / "groundtruth.json"
+    before = truth.read_bytes() if truth.exists() else None  # earlier tests may annotate
+    with serving(page, unannotated, "exurban", max_upload_bytes=limit_bytes):
+        annotate(page)
+        big = {"name": "big.xml", "mimeType": "text/xml", "buffer": b"<annotations/>" * 300}
+        page.locator("input[type=file]").set_input_files(big)  # type: ignore[arg-type]
+        page.get_by_text("Upload refused").wait_for(timeout=TIMEOUT_MS)
+        assert page.get_by_text(
+            "big.xml: 4,200 bytes is over the 2,000 bytes a file uploaded to the inspector may have"
+        ).is_visible()
+        page.wait_for_timeout(SETTLE_MS)
+        assert page.get_by_text("big.xml not imported").count() == 0  # never reached the import
+        assert (truth.read_bytes() if truth.exists() else None) == before
+
+
 def test_a_generated_truth_opens_read_only_with_its_reason(
     recordings: Recordings, page: Page
 ) -> None:

@@ -52,7 +52,7 @@ def test_serve_makes_a_token_per_run_unless_told_not_and_answers_to_its_host_nam
     (tmp_path / "a").mkdir()
     (tmp_path / "a" / "recording.yaml").write_text("format_version: 1\n")
     accesses: list[Access] = []
-    monkeypatch.setattr("app.server.serve", lambda *args: accesses.append(args[-1]))
+    monkeypatch.setattr("app.server.serve", lambda *args: accesses.append(args[6]))
     args = ["serve", "--recordings", str(tmp_path), "--allow-host", "Box.lan"]
     for _ in range(2):
         assert main([*args, *(["--no-token"] if no_token else [])]) == 0
@@ -62,6 +62,13 @@ def test_serve_makes_a_token_per_run_unless_told_not_and_answers_to_its_host_nam
         assert all(access.token for access in accesses)
         assert accesses[0].token != accesses[1].token
     assert accesses[0].allowed_hosts == {"127.0.0.1", "box.lan"}
+
+
+def test_serve_refuses_an_upload_limit_that_is_not_positive(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["serve", "--recordings", str(tmp_path), "--max-upload-mb", "0"]) == 2
+    assert "--max-upload-mb: expected a positive size, got 0.0" in capsys.readouterr().err
 
 
 def test_serve_warns_that_another_host_reaches_it_and_who_can_use_it(
