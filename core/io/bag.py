@@ -47,6 +47,7 @@ else:
 from core.io import radar_msgs
 from core.io.canframe import CanFrame
 from core.io.errors import RecordingError
+from core.io.image_header import JPEG_MAGIC, image_size_px
 from core.io.png import PNG_SIGNATURE, decode_unfiltered_grey
 from core.io.radar_msgs import CAN_FRAME
 from core.io.radarscans import RadarScans
@@ -93,7 +94,6 @@ RAW_ENCODINGS: dict[str, tuple[int, int, int | None]] = {
 }
 # cv2.imdecode gives BGR(A); grey conversion by channel count.
 DECODED_TO_GREY = {3: cv2.COLOR_BGR2GRAY, 4: cv2.COLOR_BGRA2GRAY}
-JPEG_MAGIC = b"\xff\xd8\xff"
 # ISO 11898-1: a classic CAN data frame carries at most 8 bytes.
 CAN_MAX_DLC = 8
 INT64_MAX = 2**63 - 1
@@ -233,15 +233,27 @@ def _to_8bit(img: npt.NDArray[np.uint16], bits: int) -> npt.NDArray[np.uint8]:
     return np.clip(scaled, 0, 255).astype(np.uint8)
 
 
-def _decode_compressed(msg: Any, where: str) -> npt.NDArray[Any]:
+def _decode_compressed(msg: Any, where: str, size_px: tuple[int, int] | None) -> npt.NDArray[Any]:
     """(H, W) or (H, W, 3|4) BGR(A), uint8 or uint16, from PNG or JPEG data: this project's
-    own PNG layout by `core.io.png`, anything else by OpenCV."""
+    own PNG layout by `core.io.png`, anything else by OpenCV. `size_px`: the (width, height)
+    its header must declare, checked before decoding (None: any)."""
     buf = np.asarray(msg.data, dtype=np.uint8)
     head = buf[:8].tobytes()
     if not (head.startswith(PNG_SIGNATURE) or head.startswith(JPEG_MAGIC)):
         raise RecordingError(
             f"{where}: cannot decode image: expected PNG or JPEG data, format {msg.format!r}, "
             f"{buf.size} bytes starting {head!r}"
+        )
+    kind = "PNG" if head.startswith(PNG_SIGNATURE) else "JPEG"
+    declared = image_size_px(buf.data)
+    if declared is None:
+        raise RecordingError(
+            f"{where}: damaged {kind} data ({buf.size} bytes): its header gives no image size"
+        )
+    if size_px is not None and declared != size_px:
+        raise RecordingError(
+            f"{where}: the {kind} image declares {declared[0]}x{declared[1]} pixels, the "
+            f"calibration says {size_px[0]}x{size_px[1]}; not decoded"
         )
     plain = decode_unfiltered_grey(np.ascontiguousarray(buf).data)
     if plain is not None:
@@ -252,8 +264,8 @@ def _decode_compressed(msg: Any, where: str) -> npt.NDArray[Any]:
         raise RecordingError(f"{where}: cannot decode image ({msg.format!r}): {err}") from err
     if img is None:
         raise RecordingError(
-            f"{where}: cannot decode image: expected PNG or JPEG data, format {msg.format!r}, "
-            f"{buf.size} bytes that OpenCV cannot decode"
+            f"{where}: damaged {kind} data: {buf.size} bytes (format {msg.format!r}) that "
+            "OpenCV cannot decode"
         )
     if img.dtype not in (np.uint8, np.uint16) or (img.ndim == 3 and img.shape[2] not in (3, 4)):
         raise RecordingError(
@@ -265,8 +277,9 @@ def _decode_compressed(msg: Any, where: str) -> npt.NDArray[Any]:
     return img
 
 
-def _decode_raw(msg: Any, where: str) -> npt.NDArray[Any]:
-    """(H, W) uint8 or uint16 grey from a raw sensor_msgs/Image."""
+def _decode_raw(msg: Any, where: str, size_px: tuple[int, int] | None) -> npt.NDArray[Any]:
+    """(H, W) uint8 or uint16 grey from a raw sensor_msgs/Image; `size_px` as in
+    `_decode_compressed`."""
     encoding = str(msg.encoding).lower()
     if encoding not in RAW_ENCODINGS:
         raise RecordingError(
@@ -275,6 +288,11 @@ def _decode_raw(msg: Any, where: str) -> npt.NDArray[Any]:
         )
     channels, depth, to_grey = RAW_ENCODINGS[encoding]
     height, width, step = int(msg.height), int(msg.width), int(msg.step)
+    if size_px is not None and (width, height) != size_px:
+        raise RecordingError(
+            f"{where}: the image message declares {width}x{height} pixels, the calibration "
+            f"says {size_px[0]}x{size_px[1]}; not decoded"
+        )
     data = np.asarray(msg.data, dtype=np.uint8)
     row_bytes = width * channels * depth
     if height == 0 or width == 0 or step < row_bytes or data.size < step * height:
@@ -294,7 +312,11 @@ def _decode_raw(msg: Any, where: str) -> npt.NDArray[Any]:
 
 
 def decode_image(
-    msg: Any, msgtype: str, where: str, mono16_bits: int = 16
+    msg: Any,
+    msgtype: str,
+    where: str,
+    mono16_bits: int = 16,
+    size_px: tuple[int, int] | None = None,
 ) -> npt.NDArray[np.uint8]:
     """(H, W) uint8 grey image from a sensor_msgs Image or CompressedImage.
 
@@ -302,13 +324,15 @@ def decode_image(
     rgba8. CompressedImage: JPEG (grey or colour) or PNG (8- or 16-bit, grey or colour).
     Colour becomes grey with OpenCV's BGR2GRAY weights; 16-bit values v become
     round(v * 255 / (2**mono16_bits - 1)), clipped to 255. `where` names the topic and time
-    stamp in errors.
+    stamp in errors. `size_px` (width, height): the size the image must have, checked against
+    what the message or its PNG / JPEG header declares before anything is decoded, so that a
+    small message declaring a huge image costs nothing (None: any size).
     """
     check_mono16_bits(mono16_bits)
     if msgtype == radar_msgs.COMPRESSED_IMAGE:
-        img = _decode_compressed(msg, where)
+        img = _decode_compressed(msg, where, size_px)
     else:
-        img = _decode_raw(msg, where)
+        img = _decode_raw(msg, where, size_px)
     if img.dtype == np.uint16:
         img = _to_8bit(img, mono16_bits)
     return np.ascontiguousarray(img, dtype=np.uint8)

@@ -226,7 +226,14 @@ class Drive:
         t = int(self.index.camera_log_ns[i])
         msg: Any = self._bag.read_at(self._conn, t, int(self.index.camera_occurrence[i]))
         where = f"{self._bag.path}: {self._conn.topic} at {t / 1e9:.9f} s (frame {i})"
-        return decode_image(msg, self._conn.msgtype, where, self.manifest.camera.mono16_bits)
+        size = self.camera.intrinsics
+        return decode_image(
+            msg,
+            self._conn.msgtype,
+            where,
+            self.manifest.camera.mono16_bits,
+            (size.width_px, size.height_px),
+        )
 
     def frame(self, i: int) -> FrameInput:
         """Frame `i`: image, the nearest radar scan, speed, yaw rate and ego motion."""

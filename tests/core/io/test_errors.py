@@ -165,8 +165,8 @@ def test_corrupt_png_names_topic_and_stamp(tmp_path: Path) -> None:
         assert np.isnan(drive.frame(0).speed_mps)  # no CAN section
         with pytest.raises(
             RecordingError,
-            match=r"/camera/image/compressed at 1.000000000 s .* cannot decode image: "
-            r"expected PNG or JPEG data",
+            match=r"/camera/image/compressed at 1.000000000 s \(frame 1\): damaged PNG data: "
+            r"240 bytes .* that OpenCV cannot decode",
         ):
             drive.frame(1)
 
@@ -188,5 +188,9 @@ def test_image_size_must_match_the_calibration(tmp_path: Path) -> None:
     ok, buf = cv2.imencode(".png", np.zeros((10, 20), np.uint8))
     assert ok
     rec = _bag_recording(tmp_path, [buf.tobytes()], ("/camera/image/compressed",))
-    with pytest.raises(RecordingError, match=r"frame 0: image is 20x10, calibration says 64x48"):
+    with pytest.raises(
+        RecordingError,
+        match=r"\(frame 0\): the PNG image declares 20x10 pixels, the calibration says 64x48; "
+        "not decoded",
+    ):
         Drive(rec)

@@ -157,7 +157,7 @@ def test_every_other_or_damaged_png_is_left_to_opencv(png: bytes) -> None:
 def test_a_damaged_frame_is_still_an_error_naming_where() -> None:
     msg = _frame_message(NOISE)
     msg.data = np.frombuffer(_bad_crc(msg.data.tobytes()), np.uint8)
-    with pytest.raises(RecordingError, match=r"^where: cannot decode image"):
+    with pytest.raises(RecordingError, match=r"^where: damaged PNG data: \d+ bytes"):
         decode_image(msg, COMPRESSED_IMAGE, "where")
 
 
