@@ -1,6 +1,7 @@
 """An image's size from its header, before anything is decoded.
 
     image_size_px(png_or_jpeg_bytes)   # (width_px, height_px), None when no header says it
+    file_image_size_px(path)           # the same from an image file's first bytes
 
 A frame of 500 KB may declare 8000x8000 16-bit RGBA pixels: decoding it first costs 1.3 GB
 before its size can be refused (and at OpenCV's pixel cap about 20 GB). The size is read here:
@@ -10,12 +11,19 @@ its first start-of-frame marker (SOF0-SOF15 but DHT, JPG and DAC; ITU T.81, B.2.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from core.io.png import PNG_SIGNATURE
 
 JPEG_MAGIC = b"\xff\xd8\xff"
 _IHDR_END = 24  # signature (8), chunk length (4), "IHDR" (4), width (4), height (4)
 _NOT_SOF = {0xC4, 0xC8, 0xCC}  # DHT, JPG (reserved), DAC share the SOF range
 _STANDALONE = {0x01, *range(0xD0, 0xD9)}  # TEM, RSTn, SOI, EOI: markers without a length
+# a JPEG's frame header follows its APPn and table segments (each at most 64 KB): what of a
+# file is read to find it
+HEAD_BYTES = 1 << 20
+# the largest image an import decodes (8192 x 8192): 64 MB grey, 192 MB in colour
+MAX_IMAGE_PIXELS = 1 << 26
 
 
 def image_size_px(data: bytes | memoryview) -> tuple[int, int] | None:
@@ -27,6 +35,13 @@ def image_size_px(data: bytes | memoryview) -> tuple[int, int] | None:
     if head.startswith(JPEG_MAGIC):
         return _jpeg_size(data)
     return None
+
+
+def file_image_size_px(path: Path) -> tuple[int, int] | None:
+    """`image_size_px` of the first HEAD_BYTES of the file at `path` (OSError when it cannot
+    be read)."""
+    with path.open("rb") as f:
+        return image_size_px(f.read(HEAD_BYTES))
 
 
 def _png_size(head: bytes) -> tuple[int, int] | None:

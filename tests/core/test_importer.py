@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import filecmp
 import math
+import struct
 from pathlib import Path
 from typing import Any
 
@@ -23,8 +24,10 @@ from core.camera import Intrinsics
 from core.cli import main
 from core.io import Drive, load_calibration, load_manifest, radar_msgs
 from core.io.calibration import save_camera_info
+from core.io.errors import RecordingError
 from core.io.importers.calibration_spec import scale_intrinsics
 from core.io.importers.can_mapping import MAPPING_EXAMPLE
+from core.io.importers.finish import read_grey
 from core.io.manifest import BagStream, RadarCanSource
 from core.io.writer import png_image_message, vehicle_dbc_path
 
@@ -409,6 +412,31 @@ def test_a_missing_video_or_still_is_refused(
         capsys, "import", "still", tmp_path / "no.png", tmp_path / "r", "--hfov-deg", "60"
     )
     assert (code, err) == (2, f"fusionscope import still: {tmp_path / 'no.png'}: image not found\n")
+
+
+def test_a_still_declaring_a_huge_image_is_refused_before_it_is_decoded(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    ok, buf = cv2.imencode(".png", np.zeros((48, 64), np.uint8))
+    assert ok
+    bomb = bytearray(buf.tobytes())
+    bomb[16:24] = struct.pack(">II", 40_000, 40_000)  # IHDR width, height
+    still = tmp_path / "bomb.png"
+    still.write_bytes(bytes(bomb))
+
+    def no_decoding(*args: object) -> None:
+        raise AssertionError("decoded")
+
+    monkeypatch.setattr(cv2, "imread", no_decoding)
+    code, _, err = run(capsys, "import", "still", still, tmp_path / "r", "--hfov-deg", "60")
+    assert (code, err) == (
+        2,
+        f"fusionscope import still: {still}: the image declares 40000x40000 pixels, more than "
+        "the 67,108,864 an import decodes; not decoded\n",
+    )
+    assert not (tmp_path / "r").exists()
+    with pytest.raises(RecordingError, match=r"declares 40000x40000 pixels, expected 64x48 \(f"):
+        read_grey(still, (64, 48), "f")
 
 
 def test_a_non_empty_out_dir_is_refused_and_left_alone(

@@ -33,6 +33,7 @@ from core.io import radar_msgs
 from core.io.calibration import Calibration, save_calibration
 from core.io.drive import Drive
 from core.io.errors import RecordingError
+from core.io.image_header import MAX_IMAGE_PIXELS, file_image_size_px
 from core.io.importers.calibration_spec import BuiltCalibration
 from core.io.importers.can_mapping import PreparedCan
 from core.io.index import build_index
@@ -349,10 +350,34 @@ def result(
     )
 
 
+def check_image_file(path: Path, size: tuple[int, int] | None = None, whose: str = "") -> None:
+    """RecordingError naming `path` when its PNG or JPEG header declares a size other than
+    `size` (W, H), or over MAX_IMAGE_PIXELS: before any of it is decoded (a small file may
+    declare a huge image). Other formats are left for the decoder to judge."""
+    try:
+        declared = file_image_size_px(path)
+    except OSError as err:
+        raise RecordingError(f"{path}: cannot read the image: {err.strerror or err}") from err
+    if declared is None:
+        return
+    width, height = declared
+    if size is not None and declared != size:
+        raise RecordingError(
+            f"{path}: the image declares {width}x{height} pixels, expected {size[0]}x{size[1]} "
+            f"({whose}); not decoded"
+        )
+    if width * height > MAX_IMAGE_PIXELS:
+        raise RecordingError(
+            f"{path}: the image declares {width}x{height} pixels, more than the "
+            f"{MAX_IMAGE_PIXELS:,} an import decodes; not decoded"
+        )
+
+
 def read_grey(path: Path, size: tuple[int, int] | None = None, whose: str = "") -> GreyImage:
     """(H, W) uint8 grey of the image file at `path`; RecordingError naming it when it cannot
     be decoded, or is not `size` (W, H) when that is given (`whose`: whose size it is, for
     the message)."""
+    check_image_file(path, size, whose)
     image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
     if image is None:
         raise RecordingError(f"{path}: cannot decode the image (expected a JPEG or PNG)")

@@ -20,6 +20,7 @@ from core.io.importers.finish import (
     assumption_notes,
     camera_bag,
     check_ego_from_radar,
+    check_image_file,
     check_out_dir,
     output_size,
     result,
@@ -53,6 +54,7 @@ def import_still(
         raise ValueError(f"--time-s: expected a time >= 0 s, got {t_ns / NS_PER_S:g}")
     if not image_path.is_file():
         raise RecordingError(f"{image_path}: image not found")
+    check_image_file(image_path)
     frame = cv2.imread(str(image_path), cv2.IMREAD_COLOR)
     if frame is None:
         raise RecordingError(

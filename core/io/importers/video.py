@@ -21,6 +21,7 @@ import cv2
 
 from core.io import radar_msgs
 from core.io.errors import RecordingError
+from core.io.image_header import MAX_IMAGE_PIXELS
 from core.io.importers.calibration_spec import CalibrationSpec, build_calibration
 from core.io.importers.can_mapping import CanSpec, check_can_times, prepare_can
 from core.io.importers.finish import (
@@ -103,6 +104,12 @@ def _open_video(path: Path) -> _Video:
     if width <= 0 or height <= 0:
         capture.release()
         raise RecordingError(f"{path}: the video does not say its frame size ({width}x{height})")
+    if width * height > MAX_IMAGE_PIXELS:
+        capture.release()
+        raise RecordingError(
+            f"{path}: the video's frames are {width}x{height} pixels, more than the "
+            f"{MAX_IMAGE_PIXELS:,} an import decodes"
+        )
     frame_count = int(count) if 0 < count < 2**31 else None
     return _Video(capture, fps, frame_count, width, height)
 
