@@ -484,6 +484,20 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _say_warnings(command: str, name: str, warnings: tuple[str, ...], strict: bool) -> None:
+    """Print what was skipped or repaired on reading recording `name` to stderr; with
+    `strict`, refuse it instead (RecordingError)."""
+    from core.io.errors import RecordingError
+
+    if strict and warnings:
+        raise RecordingError(
+            f"{name}: --strict: refused, reading it gave {len(warnings)} warning(s): "
+            + "; ".join(warnings)
+        )
+    for warning in warnings:
+        print(f"{command}: warning: {name}: {warning}", file=sys.stderr)
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from core.io.drive import Drive
     from core.io.errors import RecordingError
@@ -496,6 +510,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         if out_path is not None:
             _check_out_folder(out_path)
         with Drive(args.recording) as drive:
+            _say_warnings("fusionscope run", drive.path.name, drive.warnings, args.strict)
             progress = ProgressBar(f"run {drive.path.name}")
             partial = None if out_path is None else out_path.with_name(out_path.name + ".partial")
             sink = sys.stdout if partial is None else partial.open("w", encoding="utf-8")
@@ -517,6 +532,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
     from core.evaluation import report
     from core.evaluation.evaluate import evaluate_recording, total
+    from core.io.drive import Drive
     from core.io.errors import RecordingError
     from core.params import ParamsError, params_from
 
@@ -527,8 +543,12 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         other = params_from(args.compare) if args.compare is not None else None
         reports, others = [], []
         for path in args.recordings:
+            if args.strict:
+                with Drive(path) as drive:
+                    _say_warnings("fusionscope evaluate", path.name, drive.warnings, strict=True)
             bar = ProgressBar(f"evaluate {path.name}")
             reports.append(evaluate_recording(path, params, bar, baselines=args.baselines))
+            _say_warnings("fusionscope evaluate", path.name, reports[-1].warnings, strict=False)
             if other is not None:
                 bar = ProgressBar(f"evaluate {path.name} ({args.compare})")
                 others.append(evaluate_recording(path, other, bar, timing=False))
@@ -1421,6 +1441,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("recording", type=Path, help="a recording folder")
     run.add_argument("--params", metavar="FILE", help=PARAMS_HELP)
     run.add_argument("--out", type=Path, help="JSON-lines file to write (default: standard output)")
+    run.add_argument(
+        "--strict",
+        action="store_true",
+        help="refuse a recording whose reading gives warnings (skipped or repaired data, "
+        "missing signals) instead of printing them and going on",
+    )
     run.set_defaults(func=_cmd_run)
 
     evaluate = sub.add_parser(
@@ -1443,6 +1469,12 @@ def build_parser() -> argparse.ArgumentParser:
         "headline figures of both side by side",
     )
     evaluate.add_argument("--format", choices=("table", "markdown", "csv", "json"), default="table")
+    evaluate.add_argument(
+        "--strict",
+        action="store_true",
+        help="refuse a recording whose reading gives warnings (skipped or repaired data, "
+        "missing signals) instead of printing them and going on",
+    )
     evaluate.add_argument(
         "--baselines",
         action="store_true",

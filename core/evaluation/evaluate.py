@@ -80,6 +80,9 @@ class RecordingReport:
     guardrail_timing: tuple[tuple[str, GuardRailSavings], ...] = field(default=())
     # core.baselines on the same frames (None when not asked for)
     baselines: BaselineReport | None = None
+    # what was skipped or repaired on reading the recording (Drive.warnings); a total holds
+    # each recording's, named
+    warnings: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -314,7 +317,7 @@ def evaluate_recording(
                 baseline.add(frame, result, truth, calibrated, mask)
             if progress is not None:
                 progress(i + 1, len(drive))
-        report = scorer.report(drive.path.name)
+        report = dataclasses.replace(scorer.report(drive.path.name), warnings=drive.warnings)
         if baseline is not None:
             report = dataclasses.replace(report, baselines=baseline.report())
         if timing and len(drive) >= 2:
@@ -343,6 +346,7 @@ def total(reports: Sequence[RecordingReport]) -> RecordingReport:
         pitch=summed(lambda r: r.pitch),
         tracking=summed(lambda r: r.tracking),
         guardrail_timing=tuple(t for r in reports for t in r.guardrail_timing),
+        warnings=tuple(f"{r.name}: {w}" for r in reports for w in r.warnings),
         baselines=None
         if any(r.baselines is None for r in reports)
         else sum_fields([r.baselines for r in reports if r.baselines is not None]),

@@ -218,6 +218,7 @@ def figures_json(r: RecordingReport, listings: bool = True) -> dict[str, Any]:
     ms, pitch, t = r.motion_stereo, r.pitch, r.tracking
     return {
         "frames": r.frames,
+        "warnings": list(r.warnings),
         "vehicles": {
             "frames": _frames_json(r.vehicles, listings),
             "events": _events_json(r.events),

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -110,3 +112,51 @@ def test_info_on_a_folder_without_a_recording(
     assert main(["info", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("fusionscope info: ") and "recording.yaml" in err
+
+
+WARNING = "radar: 3 returns with non-finite values dropped"
+
+
+@pytest.fixture(scope="module")
+def one_second(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from core.synth.generate import generate
+
+    path = tmp_path_factory.mktemp("warned") / "highway"
+    generate("highway", 1.0, 3, path)
+    return path
+
+
+@pytest.fixture()
+def warned(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every Drive opened reports WARNING, as one whose reading skipped something."""
+    from core.io import drive
+
+    class WarnedDrive(drive.Drive):
+        def __init__(self, *args: Any, **kwargs: Any) -> None:
+            super().__init__(*args, **kwargs)
+            self.warnings = (WARNING,)
+
+    monkeypatch.setattr(drive, "Drive", WarnedDrive)
+    monkeypatch.setattr("core.evaluation.evaluate.Drive", WarnedDrive)
+
+
+@pytest.mark.usefixtures("warned")
+@pytest.mark.parametrize("command", ["run", "evaluate"])
+def test_run_and_evaluate_print_the_drives_warnings_and_strict_refuses_it(
+    one_second: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str
+) -> None:
+    out = ["--out", str(tmp_path / "r.jsonl")] if command == "run" else ["--format", "json"]
+    assert main([command, str(one_second), *out]) == 0
+    captured = capsys.readouterr()
+    assert f"fusionscope {command}: warning: highway: {WARNING}\n" in captured.err
+    if command == "evaluate":
+        assert json.loads(captured.out)["recordings"][0]["warnings"] == [WARNING]
+        assert json.loads(captured.out)["total"]["warnings"] == [f"highway: {WARNING}"]
+    (tmp_path / "r.jsonl").unlink(missing_ok=True)
+    assert main([command, str(one_second), *out, "--strict"]) == 2
+    captured = capsys.readouterr()
+    assert captured.err.startswith(
+        f"fusionscope {command}: highway: --strict: refused, reading it gave 1 warning(s): "
+        f"{WARNING}"
+    )
+    assert not (tmp_path / "r.jsonl").exists() and captured.out == ""
