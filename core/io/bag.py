@@ -50,7 +50,7 @@ from core.io.errors import RecordingError
 from core.io.image_header import JPEG_MAGIC, image_size_px
 from core.io.png import PNG_SIGNATURE, decode_unfiltered_grey
 from core.io.radar_msgs import CAN_FRAME
-from core.io.radarscans import RadarScans
+from core.io.radarscans import MAX_ABS_RANGE_RATE_MPS, MAX_RANGE_M, RadarScans, plausible
 from core.io.timeline import main_block
 
 Int64Array = npt.NDArray[np.int64]
@@ -521,7 +521,8 @@ class BagReader:
         of the UUID (little-endian, sign bit cleared), amplitude 0.
 
         Repairs what real recordings get wrong, each kind reported once through `warn`: returns
-        with a non-finite range, azimuth or velocity are dropped; scans stamped outside the
+        with a non-finite range, azimuth, velocity or amplitude, or values no radar reports
+        (`radarscans.plausible`), are dropped; scans stamped outside the
         main body of the stream (`timeline.main_block`, e.g. 1970 amid a drive) are dropped;
         scans out of time order are sorted.
         """
@@ -548,13 +549,23 @@ class BagReader:
         scan = np.asarray(scan_of_row, dtype=np.int64)
         values = np.asarray(rows, dtype=np.float64).reshape(-1, 4)
 
-        finite = np.all(np.isfinite(values[:, :3]), axis=1)
+        finite = np.all(np.isfinite(values), axis=1)
         if not finite.all():
             bad_scans = t[np.unique(scan[~finite])]
             warn(
                 f"{where}: {np.count_nonzero(~finite)} return(s) with a non-finite range, "
-                f"azimuth or velocity dropped, in scans at log t = {_stamps(bad_scans)}"
+                f"azimuth, velocity or amplitude dropped, in scans at log t = "
+                f"{_stamps(bad_scans)}"
             )
+        implausible = finite & ~plausible(values[:, 0], values[:, 1], values[:, 2])
+        if implausible.any():
+            warn(
+                f"{where}: {np.count_nonzero(implausible)} return(s) no radar reports (range "
+                f"outside 0-{MAX_RANGE_M:g} m, azimuth beyond +-pi or range rate over "
+                f"{MAX_ABS_RANGE_RATE_MPS:g} m/s) dropped, in scans at log t = "
+                f"{_stamps(t[np.unique(scan[implausible])])}"
+            )
+            finite &= ~implausible
         in_block = main_block(t)
         if not in_block.all():
             warn(

@@ -28,7 +28,7 @@ from core.io.canlog import (
 )
 from core.io.errors import RecordingError
 from core.io.manifest import RadarCanSource, RadarField
-from core.io.radarscans import RadarScans
+from core.io.radarscans import MAX_ABS_RANGE_RATE_MPS, MAX_RANGE_M, RadarScans, plausible
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -150,6 +150,17 @@ class RadarCanDecoder(FrameDecoder):
         y = _si(lateral[keep], src.lateral)
         rr = _si(range_rate[keep], src.range_rate) if src.range_rate else np.full(len(d), np.nan)
         ids = track_id[keep].astype(np.int64) if src.track_id else slot[keep].astype(np.int64)
+        sane = plausible(np.hypot(d, y), np.arctan2(y, d), rr)
+        if not sane.all():
+            warn(
+                f"{self.where}: dropped {np.count_nonzero(~sane)} radar targets no radar "
+                f"reports (range over {MAX_RANGE_M:g} m or range rate over "
+                f"{MAX_ABS_RANGE_RATE_MPS:g} m/s; first at "
+                f"t={t[keep][~sane][0] / NS_PER_S:.6f} s)"
+            )
+            kept_rows = np.flatnonzero(keep)
+            keep[kept_rows[~sane]] = False
+            d, y, rr, ids = d[sane], y[sane], rr[sane], ids[sane]
         scans = np.arange(len(scan_t) + 1)
         return RadarScans(
             t_ns=np.asarray(scan_t, dtype=np.int64) + self.offset_ns,

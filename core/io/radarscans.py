@@ -11,6 +11,29 @@ import numpy.typing as npt
 Int64Array = npt.NDArray[np.int64]
 FloatArray = npt.NDArray[np.float64]
 
+# What no automotive radar reports: beyond 1 km (the longest-range units reach about 300 m),
+# outside a half-turn of azimuth, faster than 300 m/s (1,080 km/h) along the line of sight.
+# A return outside these (3e38 m from a garbled float) is damage, dropped like a NaN.
+MAX_RANGE_M = 1_000.0
+MAX_ABS_RANGE_RATE_MPS = 300.0
+_PI_FLOAT32 = float(np.float32(math.pi))  # +-pi as a float32 message field holds it
+
+
+def plausible(
+    range_m: FloatArray, azimuth_rad: FloatArray, range_rate_mps: FloatArray
+) -> npt.NDArray[np.bool_]:
+    """(R,) bool: the returns whose finite values a radar could report (see MAX_RANGE_M);
+    a NaN range rate counts as not measured and passes."""
+    with np.errstate(invalid="ignore"):
+        return (
+            np.isfinite(range_m)
+            & (range_m >= 0.0)
+            & (range_m <= MAX_RANGE_M)
+            & (np.abs(azimuth_rad) <= _PI_FLOAT32)
+            & ~(np.abs(range_rate_mps) > MAX_ABS_RANGE_RATE_MPS)
+            & ~np.isinf(range_rate_mps)
+        )
+
 
 @dataclass(frozen=True, eq=False)
 class RadarScans:

@@ -337,7 +337,7 @@ def test_non_finite_returns_are_dropped_in_one_warning(tmp_path: Path, kind: Kin
     scans = [
         [(10.0, 0.0, 0.0, 1.0), (nan, 0.0, 0.0, 1.0)],
         [(inf, 0.0, 0.0, 1.0), (11.0, nan, 0.0, 1.0), (12.0, 0.0, -inf, 1.0)],
-        [(13.0, 0.0, 0.0, nan)],  # amplitude is not checked
+        [(13.0, 0.0, 0.0, 1.0), (14.0, 0.0, 0.0, nan), (15.0, 0.0, 0.0, inf)],
     ]
     messages: list[Message] = [
         ("/radar", RADAR_SCAN, _t(k), radar_scan(_t(k), s)) for k, s in enumerate(scans)
@@ -348,8 +348,33 @@ def test_non_finite_returns_are_dropped_in_one_warning(tmp_path: Path, kind: Kin
     assert radar.range_m.tolist() == [10.0, 13.0]
     assert radar.start.tolist() == [0, 1, 1, 2]
     assert len(warnings) == 1
-    assert "radar topic /radar: 4 return(s) with a non-finite range" in warnings[0]
+    assert (
+        "radar topic /radar: 6 return(s) with a non-finite range, azimuth, velocity or "
+        "amplitude dropped" in warnings[0]
+    )
     assert "1700000000.123456789 s, 1700000000.173456789 s" in warnings[0]
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_returns_no_radar_reports_are_dropped_in_one_warning(tmp_path: Path, kind: Kind) -> None:
+    returns = [
+        (3e38, 0.0, 0.0, 1.0),  # a garbled float: finite, but no radar sees 3e38 m
+        (-1.0, 0.0, 0.0, 1.0),
+        (20.0, 4.0, 0.0, 1.0),  # beyond a half-turn
+        (20.0, 0.0, 500.0, 1.0),
+        (1000.0, -math.pi, -300.0, 1.0),  # at the edges: kept
+    ]
+    messages: list[Message] = [("/radar", RADAR_SCAN, _t(0), radar_scan(_t(0), returns))]
+    warnings: list[str] = []
+    with BagReader(_write(tmp_path, kind, messages)) as bag:
+        radar = bag.read_radar(bag.connection(None, RADAR_TYPES, "radar"), warn=warnings.append)
+    assert radar.range_m.tolist() == [1000.0] and radar.start.tolist() == [0, 1]
+    (warning,) = warnings
+    assert (
+        "radar topic /radar: 4 return(s) no radar reports (range outside 0-1000 m, azimuth "
+        "beyond +-pi or range rate over 300 m/s) dropped, in scans at log t = 1700000000."
+        in warning
+    )
 
 
 @pytest.mark.parametrize("kind", KINDS)

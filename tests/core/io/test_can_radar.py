@@ -207,13 +207,16 @@ def test_non_finite_targets_are_dropped_and_reported(db: Database) -> None:
         CanFrame(NS + 1000, 0x401, False, struct.pack(">ff", math.nan, 1.0)),
         CanFrame(2 * NS, 0x400, False, struct.pack(">ff", 30.0, math.inf)),
         CanFrame(2 * NS + 1000, 0x401, False, struct.pack(">ff", 40.0, 0.0)),
+        CanFrame(3 * NS, 0x400, False, struct.pack(">ff", 3e38, 0.0)),  # finite, but no radar's
     ]
     scans, warnings = _run(RadarCanDecoder(db, source, "radar.log"), frames)
-    np.testing.assert_array_equal(scans.start, [0, 1, 2])
+    np.testing.assert_array_equal(scans.start, [0, 1, 2, 2])
     np.testing.assert_allclose(scans.range_m, [math.hypot(20.0, 1.0), 40.0])
     assert np.all(np.isnan(scans.range_rate_mps))  # not mapped
     assert warnings == [
-        "radar.log: dropped 2 radar targets with non-finite values (first: FTRK_1 at t=1.000001 s)"
+        "radar.log: dropped 2 radar targets with non-finite values (first: FTRK_1 at t=1.000001 s)",
+        "radar.log: dropped 1 radar targets no radar reports (range over 1000 m or range rate "
+        "over 300 m/s; first at t=3.000000 s)",
     ]
 
 
