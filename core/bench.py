@@ -574,8 +574,8 @@ def _run_throughput(recording: Path | str, params: Params, passes: int) -> RunTh
         for _ in range(passes):
             t0 = time.perf_counter()
             with Drive(recording) as drive, out.open("w", encoding="utf-8") as sink:
-                frames = write_results(drive, drive.camera, params, sink)
-                name = drive.path.name
+                write_results(drive, drive.camera, params, sink, strict=True)
+                frames, name = len(drive), drive.path.name
             rates.append(frames / (time.perf_counter() - t0))
     return RunThroughput(statistics.median(rates), frames, passes, name)
 

@@ -498,6 +498,22 @@ def _say_warnings(command: str, name: str, warnings: tuple[str, ...], strict: bo
         print(f"{command}: warning: {name}: {warning}", file=sys.stderr)
 
 
+def _say_skipped(
+    command: str, name: str, skipped: tuple[tuple[int, str], ...], frame_count: int
+) -> None:
+    """Print, at the end, the frames of recording `name` that could not be read and were
+    skipped (each with why) to stderr."""
+    if not skipped:
+        return
+    print(
+        f"{command}: warning: {name}: skipped {len(skipped)} of {frame_count} frame(s) that "
+        "could not be read (--strict stops at the first):",
+        file=sys.stderr,
+    )
+    for index, why in skipped:
+        print(f"  frame {index}: {why}", file=sys.stderr)
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from core.io.drive import Drive
     from core.io.errors import RecordingError
@@ -515,15 +531,21 @@ def _cmd_run(args: argparse.Namespace) -> int:
             partial = None if out_path is None else out_path.with_name(out_path.name + ".partial")
             sink = sys.stdout if partial is None else partial.open("w", encoding="utf-8")
             try:
-                write_results(drive, drive.camera, params, sink, progress)
+                skipped = write_results(drive, drive.camera, params, sink, progress, args.strict)
+            except BaseException:
+                if partial is not None:  # a complete file or none: never half a drive
+                    partial.unlink(missing_ok=True)
+                raise
             finally:
                 if sink is not sys.stdout:
                     sink.close()
             if partial is not None and out_path is not None:
-                partial.replace(out_path)  # a complete file or none: never half a drive
+                partial.replace(out_path)
     except (RecordingError, ValueError, OSError) as err:
-        print(f"fusionscope run: {err}", file=sys.stderr)
+        written = f"; nothing written to {out_path}" if out_path is not None else ""
+        print(f"fusionscope run: {err}{written}", file=sys.stderr)
         return 2
+    _say_skipped("fusionscope run", drive.path.name, skipped, len(drive))
     return 0
 
 
@@ -547,7 +569,9 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
                 with Drive(path) as drive:
                     _say_warnings("fusionscope evaluate", path.name, drive.warnings, strict=True)
             bar = ProgressBar(f"evaluate {path.name}")
-            reports.append(evaluate_recording(path, params, bar, baselines=args.baselines))
+            reports.append(
+                evaluate_recording(path, params, bar, baselines=args.baselines, strict=args.strict)
+            )
             _say_warnings("fusionscope evaluate", path.name, reports[-1].warnings, strict=False)
             if other is not None:
                 bar = ProgressBar(f"evaluate {path.name} ({args.compare})")
@@ -1445,7 +1469,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--strict",
         action="store_true",
         help="refuse a recording whose reading gives warnings (skipped or repaired data, "
-        "missing signals) instead of printing them and going on",
+        "missing signals), and stop at a frame that cannot be read, instead of saying so "
+        "and going on",
     )
     run.set_defaults(func=_cmd_run)
 
@@ -1473,7 +1498,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--strict",
         action="store_true",
         help="refuse a recording whose reading gives warnings (skipped or repaired data, "
-        "missing signals) instead of printing them and going on",
+        "missing signals), and stop at a frame that cannot be read, instead of saying so "
+        "and going on",
     )
     evaluate.add_argument(
         "--baselines",

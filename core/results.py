@@ -18,6 +18,7 @@ from typing import Any, TextIO
 
 from core.camera import CameraModel
 from core.engine import FrameResult, Frames, FusionEngine
+from core.io.errors import RecordingError
 from core.params import Params
 
 RESULTS_FORMAT_VERSION = 1
@@ -102,13 +103,24 @@ def write_results(
     params: Params,
     sink: TextIO,
     progress: Callable[[int, int], None] | None = None,
-) -> int:
+    strict: bool = False,
+) -> tuple[tuple[int, str], ...]:
     """`fusionscope run`'s loop: every frame of `drive` through a new engine, one compact
-    JSON line each into `sink`; returns the number of frames."""
+    JSON line each into `sink`. A frame that cannot be read (RecordingError) is skipped: it
+    gets no line, the engine starts over after it, and it is returned as (index, why); with
+    `strict` the error is raised instead."""
     engine = FusionEngine(params, camera)
+    skipped: list[tuple[int, str]] = []
     for i in range(len(drive)):
-        record = frame_record(engine.process(drive.frame(i)))
-        sink.write(json.dumps(record, separators=(",", ":")) + "\n")
+        try:
+            frame = drive.frame(i)
+        except RecordingError as err:
+            if strict:
+                raise
+            skipped.append((i, str(err)))
+        else:
+            record = frame_record(engine.process(frame))
+            sink.write(json.dumps(record, separators=(",", ":")) + "\n")
         if progress is not None:
             progress(i + 1, len(drive))
-    return len(drive)
+    return tuple(skipped)

@@ -19,6 +19,7 @@ from typing import TypeVar
 from core.bench import GuardRailSavings, guard_rail_savings, one_thread
 from core.engine import FrameResult, Frames, FusionEngine
 from core.io.drive import Drive
+from core.io.errors import RecordingError
 from core.io.frame import FrameInput
 from core.io.groundtruth import FrameTruth
 from core.params import Params
@@ -281,8 +282,11 @@ def evaluate_recording(
     timing: bool = True,
     baselines: bool = False,
     frames: Frames | None = None,
+    strict: bool = False,
 ) -> RecordingReport:
-    """Play the recording at `path` through the engine and score it (module docstring);
+    """Play the recording at `path` through the engine and score it (module docstring); a
+    frame that cannot be read is not scored and is named in the report's warnings (the
+    engine starts over after it), or with `strict` its RecordingError is raised;
     timing: also time paper 002's table I (VD, GRD, OBM) on it, one thread; baselines:
     also run and score core.baselines on the same frames (evaluation.baselines); frames:
     the recording's frames already open (the inspector's drive, which keeps the frames it
@@ -308,8 +312,17 @@ def evaluate_recording(
         scorer = _Scorer(params)
         baseline = BaselineScorer(params, drive.camera) if baselines else None
         calibrated = drive.camera.extrinsics.pitch_rad
+        unread: list[str] = []
         for i in range(len(drive)):
-            frame = source.frame(i)
+            try:
+                frame = source.frame(i)
+            except RecordingError as err:
+                if strict:
+                    raise
+                unread.append(f"frame {i} could not be read and is not scored: {err}")
+                if progress is not None:
+                    progress(i + 1, len(drive))
+                continue
             result = engine.process(frame)
             truth = drive.truth(i)
             mask = None if truth is None else scorer.add(frame, result, truth, calibrated)
@@ -317,10 +330,12 @@ def evaluate_recording(
                 baseline.add(frame, result, truth, calibrated, mask)
             if progress is not None:
                 progress(i + 1, len(drive))
-        report = dataclasses.replace(scorer.report(drive.path.name), warnings=drive.warnings)
+        report = dataclasses.replace(
+            scorer.report(drive.path.name), warnings=(*drive.warnings, *unread)
+        )
         if baseline is not None:
             report = dataclasses.replace(report, baselines=baseline.report())
-        if timing and len(drive) >= 2:
+        if timing and len(drive) >= 2 and not unread:  # the timing reads every frame
             timed = guard_rail_savings(drive, params)
             report = dataclasses.replace(report, guardrail_timing=((report.name, timed),))
         return report

@@ -160,3 +160,57 @@ def test_run_and_evaluate_print_the_drives_warnings_and_strict_refuses_it(
         f"{WARNING}"
     )
     assert not (tmp_path / "r.jsonl").exists() and captured.out == ""
+
+
+DAMAGED = 3
+
+
+@pytest.fixture()
+def damaged(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Frame DAMAGED of every Drive opened cannot be read, as a damaged PNG in a bag
+    (tests/core/io/test_errors.py makes one for real)."""
+    from core.io import drive
+    from core.io.errors import RecordingError
+
+    class DamagedDrive(drive.Drive):
+        def frame(self, i: int) -> Any:
+            if i == DAMAGED:
+                raise RecordingError(f"bag: frame {i}: damaged PNG data")
+            return super().frame(i)
+
+    monkeypatch.setattr(drive, "Drive", DamagedDrive)
+    monkeypatch.setattr("core.evaluation.evaluate.Drive", DamagedDrive)
+
+
+@pytest.mark.usefixtures("damaged")
+def test_run_skips_a_frame_it_cannot_read_and_says_so_at_the_end(
+    one_second: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "r.jsonl"
+    assert main(["run", str(one_second), "--out", str(out)]) == 0
+    frames = [json.loads(line)["frame"] for line in out.read_text().splitlines()]
+    assert DAMAGED not in frames and len(frames) == 9 and frames[DAMAGED : DAMAGED + 1] == [4]
+    err = capsys.readouterr().err
+    assert (
+        "fusionscope run: warning: highway: skipped 1 of 10 frame(s) that could not be read "
+        "(--strict stops at the first):\n  frame 3: bag: frame 3: damaged PNG data\n"
+    ) in err
+    out.unlink()
+    assert main(["run", str(one_second), "--out", str(out), "--strict"]) == 2
+    err = capsys.readouterr().err
+    assert f"damaged PNG data; nothing written to {out}" in err
+    assert not out.exists() and not out.with_name("r.jsonl.partial").exists()
+
+
+@pytest.mark.usefixtures("damaged")
+def test_evaluate_scores_the_frames_it_can_read_and_names_the_others(
+    one_second: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["evaluate", str(one_second), "--format", "json"]) == 0
+    captured = capsys.readouterr()
+    why = "frame 3 could not be read and is not scored: bag: frame 3: damaged PNG data"
+    assert f"fusionscope evaluate: warning: highway: {why}\n" in captured.err
+    (recording,) = json.loads(captured.out)["recordings"]
+    assert recording["warnings"] == [why] and recording["frames"] == 9
+    assert main(["evaluate", str(one_second), "--strict"]) == 2
+    assert "damaged PNG data" in capsys.readouterr().err
